@@ -1,0 +1,276 @@
+"""The one time loop: method selection, marching, what to save.
+
+``simulate(scene)`` owns the loop. A tangential method (``solvers/``) offers
+``initial_state()`` and ``step(state, t1, loads1) -> (state, report)``; a step
+never writes output. What is stored is decided here by :class:`SaveAt`.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+import xarray as xr
+
+from .geometry import NormalProblem
+from .state import ContactState, Loads, Regime
+
+METHODS = ("auto", "exact", "general")
+FIELDS = ("p", "q", "slip")
+
+
+class MethodError(ValueError):
+    """A method was asked for that cannot serve the scene."""
+
+
+def exact_method_reason(scene) -> str | None:
+    """Why the exact memory method cannot serve ``scene`` (None when it can)."""
+    h = scene.history
+    if not scene.profile.symmetric:
+        return "the profile is not symmetric"
+    if np.any(h.M != 0.0):
+        return "the moment M is not identically zero"
+    if np.any(h.sigma != 0.0):
+        return "the bulk tension sigma is not identically zero"
+    return None
+
+
+def choose_method(scene, method: str | None = None) -> str:
+    """Resolve ``auto`` to the cheapest method that is exact for the scene."""
+    method = method or scene.solver.method
+    if method not in METHODS:
+        raise MethodError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
+    reason = exact_method_reason(scene)
+    if method == "exact":
+        if reason is not None:
+            raise MethodError(f"method 'exact' cannot serve this scene: {reason}")
+        return "exact"
+    if method == "auto":
+        return "exact" if reason is None else "general"
+    return "general"
+
+
+@dataclass(frozen=True)
+class SaveAt:
+    """What the loop stores: every ``every``-th step (and the last), fields at ``x``.
+
+    Attributes
+    ----------
+    every : int
+    fields : tuple of str
+        Subset of ('p', 'q', 'slip').
+    x : ndarray, shape (nx,)
+        Stations of the per-point fields (empty when no fields are stored).
+    """
+
+    every: int
+    fields: tuple
+    x: np.ndarray = field(repr=False)
+
+    def stored(self, i: int, n: int) -> bool:
+        return i % self.every == 0 or i == n
+
+
+def field_stations(scene, problem: NormalProblem, points: int) -> np.ndarray:
+    """Evenly spaced stations covering the largest contact of the history, 2 % margin."""
+    h = scene.history
+    P_max = float(np.max(h.P)) if h.P.size else 0.0
+    if P_max <= 0:
+        return np.linspace(-1.0, 1.0, points) * problem.profile.length_scale
+    if scene.profile.symmetric and not np.any(h.M):
+        half = float(problem.half_width(P_max))
+        return np.linspace(-1.02 * half, 1.02 * half, points)
+    left, right = np.inf, -np.inf
+    for P, M in zip(h.P, h.M):
+        if P > 0:
+            sol = problem.solve(P, M)
+            left, right = min(left, sol.left), max(right, sol.right)
+    margin = 0.02 * (right - left)
+    return np.linspace(left - margin, right + margin, points)
+
+
+def build_method(scene, name: str, problem: NormalProblem, stations: np.ndarray | None):
+    """Instantiate the tangential method ``name`` for ``scene``."""
+    P_max = float(np.max(scene.history.P)) if scene.history.P.size else 0.0
+    if name == "exact":
+        from .solvers.exact import ExactMemory
+
+        return ExactMemory(problem, scene.friction, P_max, stations=stations)
+    from .solvers import general  # noqa: F401  (built in a later issue)
+
+    return general.GeneralSolver(problem, scene.friction, scene.solver.nodes, stations=stations)
+
+
+@dataclass
+class _Records:
+    """Column buffers of the stored steps."""
+
+    names = ("t", "P", "Q", "M", "sigma", "contact_left", "contact_right",
+             "stick_left", "stick_right", "regime", "shift", "dissipation")
+
+    def __post_init__(self):
+        self.cols = {k: [] for k in self.names}
+        self.fields = {}
+
+    def add(self, state: ContactState, regime: Regime):
+        c = self.cols
+        c["t"].append(state.t)
+        for k, v in zip(("P", "Q", "M", "sigma"), state.loads):
+            c[k].append(v)
+        c["contact_left"].append(state.contact_left)
+        c["contact_right"].append(state.contact_right)
+        c["stick_left"].append(state.stick_left)
+        c["stick_right"].append(state.stick_right)
+        c["regime"].append(int(regime))
+        c["shift"].append(state.shift)
+        c["dissipation"].append(state.dissipation)
+
+    def add_fields(self, values: dict):
+        for k, v in values.items():
+            self.fields.setdefault(k, []).append(v)
+
+
+def simulate(
+    scene,
+    *,
+    method: str | None = None,
+    nodes: int | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> xr.Dataset:
+    """March ``scene``'s load history and return the result dataset of interface.md.
+
+    Parameters
+    ----------
+    scene : Scene
+    method : {'auto', 'exact', 'general'}, optional
+        Overrides ``scene.solver.method``.
+    nodes : int, optional
+        Overrides ``scene.solver.nodes`` (general solver resolution).
+    progress : callable(i, n), optional
+        Called after each step with the step index and the number of steps.
+
+    Returns
+    -------
+    xarray.Dataset
+        Variables of interface.md; attribute ``complete`` is 0 when the run was
+        interrupted (KeyboardInterrupt), in which case every completed stored step
+        is present.
+    """
+    from . import __version__
+
+    if nodes is not None:
+        import dataclasses
+
+        scene = dataclasses.replace(scene, solver=dataclasses.replace(scene.solver, nodes=int(nodes)))
+    name = choose_method(scene, method)
+    problem = NormalProblem(scene.profile, scene.material.compliance)
+    fields = tuple(f for f in FIELDS if f in scene.output.fields)
+    x = field_stations(scene, problem, scene.output.points) if fields else np.zeros(0)
+    save = SaveAt(scene.output.every, fields, x)
+    solver = build_method(scene, name, problem, x if "slip" in fields else None)
+
+    h = scene.history
+    n = h.n_steps
+    state = solver.initial_state(float(h.t[0]))
+    rec = _Records()
+    counters = {"steps": 0, "stick_steps": 0, "slip_solves": 0, "normal_solves": 0}
+    rec.add(state, Regime.SEPARATED)
+    if fields:
+        rec.add_fields(_fields(solver, state, save))
+    complete = 1
+    messages: list[str] = []
+    started = time.perf_counter()
+    try:
+        for i in range(1, n + 1):
+            loads1 = Loads(float(h.P[i]), float(h.Q[i]), float(h.M[i]), float(h.sigma[i]))
+            state, report = solver.step(state, float(h.t[i]), loads1)
+            counters["steps"] += 1
+            counters["slip_solves"] += report.slipped
+            counters["stick_steps"] += report.regime == Regime.STICK
+            counters["normal_solves"] += report.normal_solved
+            if report.message and report.message not in messages:
+                messages.append(report.message)
+            if save.stored(i, n):
+                rec.add(state, report.regime)
+                if fields:
+                    rec.add_fields(_fields(solver, state, save))
+            if progress is not None:
+                progress(i, n)
+    except KeyboardInterrupt:
+        complete = 0
+    elapsed = time.perf_counter() - started
+    ds = _dataset(rec, save)
+    ds.attrs.update(
+        {
+            "title": f"halfslip run of {scene.name}",
+            "scene": scene.text,
+            "scene_name": scene.name,
+            "method": name,
+            "halfslip_version": __version__,
+            "complete": complete,
+            "friction": scene.friction,
+            "compliance": scene.material.compliance,
+            "shift_datum": getattr(solver, "datum", float("nan")),
+            "wall_time": elapsed,
+            "messages": "\n".join(messages),
+            **{f"count_{k}": v for k, v in counters.items()},
+        }
+    )
+    return ds
+
+
+def _fields(solver, state: ContactState, save: SaveAt) -> dict:
+    out = {}
+    mem = state.memory
+    if "p" in save.fields or "q" in save.fields:
+        p, q = solver.tractions(mem, save.x)
+        if "p" in save.fields:
+            out["p"] = p
+        if "q" in save.fields:
+            out["q"] = q
+    if "slip" in save.fields:
+        out["slip"] = solver.slip(mem)
+    return out
+
+
+_META = {
+    "t": ("s", "time"),
+    "x": ("m", "surface coordinate"),
+    "P": ("N/m", "normal load"),
+    "Q": ("N/m", "shear force"),
+    "M": ("N", "moment about the pad axis"),
+    "sigma": ("Pa", "differential bulk tension sigma_A - sigma_B"),
+    "contact_left": ("m", "left contact edge"),
+    "contact_right": ("m", "right contact edge"),
+    "stick_left": ("m", "left stick-zone edge"),
+    "stick_right": ("m", "right stick-zone edge"),
+    "regime": ("1", "contact regime"),
+    "shift": ("m", "rigid tangential displacement of pad relative to substrate"),
+    "dissipation": ("J/m", "frictional energy dissipated since the start"),
+    "p": ("Pa", "contact pressure"),
+    "q": ("Pa", "shear traction exerted by the pad on the substrate"),
+    "slip": ("m", "accumulated slip since the point entered contact"),
+}
+
+
+def _dataset(rec: _Records, save: SaveAt) -> xr.Dataset:
+    cols = rec.cols
+    t = np.asarray(cols["t"], float)
+    data = {}
+    for k in rec.names[1:]:
+        dtype = np.int8 if k == "regime" else float
+        data[k] = ("t", np.asarray(cols[k], dtype))
+    coords = {"t": t}
+    if save.fields:
+        coords["x"] = save.x
+        for k, rows in rec.fields.items():
+            data[k] = (("t", "x"), np.asarray(rows, float))
+    ds = xr.Dataset(data, coords=coords)
+    for k in ds.variables:
+        units, long_name = _META[k]
+        ds[k].attrs.update(units=units, long_name=long_name)
+    ds["regime"].attrs.update(
+        flag_values=np.arange(4, dtype=np.int8), flag_meanings=Regime.flag_meanings()
+    )
+    return ds

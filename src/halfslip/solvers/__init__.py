@@ -1,0 +1,1 @@
+"""Tangential solvers: one file per method."""

@@ -1,0 +1,98 @@
+"""The contact state carried between steps, and what a step reports.
+
+The state is immutable: a step returns a new :class:`ContactState` and never
+modifies the one it was given. Solver-specific memory (the load-level function
+w(P') of the exact method, the locked-in strains of the general solver) lives in
+``memory``, itself immutable.
+"""
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+from typing import Any, NamedTuple
+
+import numpy as np
+
+
+class Loads(NamedTuple):
+    """The four loads of a half-plane contact, SI per unit depth."""
+
+    P: float
+    Q: float
+    M: float
+    sigma: float
+
+
+class Regime(enum.IntEnum):
+    """What a step did; stored in the ``regime`` variable of the result."""
+
+    SEPARATED = 0
+    STICK = 1
+    PARTIAL_SLIP = 2
+    GROSS_SLIDING = 3
+
+    @classmethod
+    def flag_meanings(cls) -> str:
+        return " ".join(m.name.lower() for m in cls)
+
+
+@dataclass(frozen=True)
+class StepReport:
+    """What one step did.
+
+    Attributes
+    ----------
+    regime : Regime
+        Outcome of the step (state at its end).
+    slipped : bool
+        Whether any point slipped during the step (a slip solve was needed).
+    normal_solved : bool
+        Whether the normal problem was solved (False when P and M were unchanged
+        or the method needs no normal solve).
+    message : str
+        Anything the user should hear about, e.g. a clamped shear force.
+    """
+
+    regime: Regime
+    slipped: bool
+    normal_solved: bool
+    message: str = ""
+
+
+@dataclass(frozen=True)
+class ContactState:
+    """State of the contact at the end of a step.
+
+    Attributes
+    ----------
+    t : float
+        Time [s].
+    loads : Loads
+        Applied loads at ``t``.
+    contact_left, contact_right : float
+        Contact edges [m]; NaN when separated.
+    stick_left, stick_right : float
+        Stick-zone edges [m]; NaN when nothing sticks.
+    shift : float
+        Rigid tangential displacement of pad relative to substrate [m], with the
+        datum of the logarithmic kernel stated by the method.
+    dissipation : float
+        Frictional energy dissipated since the start [J/m].
+    memory : Any
+        Method-specific immutable memory.
+    """
+
+    t: float
+    loads: Loads
+    contact_left: float
+    contact_right: float
+    stick_left: float
+    stick_right: float
+    shift: float
+    dissipation: float
+    memory: Any = field(repr=False)
+
+
+def as_float_array(x) -> np.ndarray:
+    """Return ``x`` as a 1-D float array (a scalar becomes shape (1,))."""
+    return np.atleast_1d(np.asarray(x, dtype=float))
