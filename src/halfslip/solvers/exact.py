@@ -141,10 +141,16 @@ class ExactMemory:
             k = (Q1 - Q0) / (P1 - P0)
             w = min(max(k, -self.f), self.f)
             L1 = lv.lam(P1)
-            P.append(P1)
-            W.append(Q0 + w * (P1 - P0))
-            Cc.append(Cc[-1] + w * (L1 - L[-1]))
-            L.append(L1)
+            W1 = Q0 + w * (P1 - P0)
+            if len(P) > 1 and abs((W[-1] - W[-2]) / (P[-1] - P[-2]) - w) <= 1e-12 * self.f:
+                # collinear with the top piece: move its end instead of adding a knot
+                P[-1], W[-1], L[-1] = P1, W1, L1
+                Cc[-1] = Cc[-2] + (W1 - W[-2]) / (P1 - P[-2]) * (L1 - L[-2])
+            else:
+                P.append(P1)
+                W.append(W1)
+                Cc.append(Cc[-1] + w * (L1 - L[-1]))
+                L.append(L1)
         elif P1 < P0:
             while len(P) > 1 and P[-2] >= P1:
                 P.pop(), W.pop(), L.pop(), Cc.pop()
@@ -176,8 +182,12 @@ class ExactMemory:
             return 0.0, True
         c1 = s * Q1 - f * P1
         P, W, L, Cc = tr.P, tr.W, tr.L, tr.C
-        # pop knots (above the origin) that lie inside the slip band, H(P_j) <= c1
-        while len(P) > 1 and s * W[-2] - f * P[-2] <= c1:
+        # Pop knots strictly inside the slip band, H(P_j) < c1. Knots on the slip
+        # line (within rounding) are kept: their levels already carry w = s f and
+        # do not change, so the points they govern do not slip and the stick level
+        # is the highest level still on or above the line.
+        tol = 64 * _EPS * (f * P1 + abs(Q1))
+        while len(P) > 1 and s * W[-2] - f * P[-2] < c1 - tol:
             P.pop(), W.pop(), L.pop(), Cc.pop()
         # crossing inside the piece (P[-2], P[-1]) -- or the top knot is the old top
         j = len(P) - 2

@@ -1,0 +1,33 @@
+"""halfslip: frictional partial slip of elastic half-plane contacts.
+
+Public names are listed here explicitly; see docs/interface.md for the
+user-facing contract (scene YAML, command line, result files).
+"""
+from importlib.metadata import PackageNotFoundError, version
+
+from .errors import HalfslipInputError
+from .geometry import Hertz, Material, NormalProblem, RoundedPunch, TabulatedProfile
+from .histories import LoadHistory, Segment
+from .scene import OutputOptions, Scene, SolverOptions, load_scene, parse_scene
+
+try:
+    __version__ = version("halfslip")
+except PackageNotFoundError:
+    __version__ = "0.1.0"
+
+__all__ = [
+    "HalfslipInputError",
+    "Hertz",
+    "LoadHistory",
+    "Material",
+    "NormalProblem",
+    "OutputOptions",
+    "RoundedPunch",
+    "Scene",
+    "Segment",
+    "SolverOptions",
+    "TabulatedProfile",
+    "__version__",
+    "load_scene",
+    "parse_scene",
+]

@@ -1,0 +1,109 @@
+"""The ``halfslip`` command line, thin over the Python API.
+
+Every command of the :func:`main` group inherits its error handling: a
+:class:`~halfslip.errors.HalfslipInputError` anywhere below a command becomes
+one line ``halfslip: <file>:<line>: <field>: <message>`` on stderr and exit
+status 2 (:data:`EXIT_INPUT_ERROR`), never a traceback.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import click
+
+from . import __version__
+from .errors import HalfslipInputError
+from .geometry import Hertz, RoundedPunch, TabulatedProfile
+from .scene import Scene, load_scene
+
+EXIT_INPUT_ERROR = 2
+"""Exit status for bad input (the same status click uses for usage errors)."""
+
+_UNITS = {"P": "N/m", "Q": "N/m", "M": "N", "sigma": "Pa"}
+
+
+class HalfslipGroup(click.Group):
+    """A click group whose commands report bad input in one line.
+
+    Commands added with ``@main.command()`` need no error handling of their
+    own for :class:`HalfslipInputError`.
+    """
+
+    def invoke(self, ctx: click.Context) -> Any:
+        """Run the subcommand; turn a HalfslipInputError into one line and exit 2."""
+        try:
+            return super().invoke(ctx)
+        except HalfslipInputError as error:
+            click.echo(f"halfslip: {error}", err=True)
+            ctx.exit(EXIT_INPUT_ERROR)
+
+
+@click.group(cls=HalfslipGroup)
+@click.version_option(__version__, prog_name="halfslip")
+def main() -> None:
+    """Frictional partial slip of elastic half-plane contacts, from YAML scenes."""
+
+
+@main.command()
+@click.argument("scene_file", metavar="SCENE.yaml")
+def validate(scene_file: str) -> None:
+    """Check a scene and print it resolved, with a summary of its load history.
+
+    Warnings (|Q| > fP somewhere, loads that jump at the start of cycles) go
+    to stderr; the exit status is 0 for a valid scene, 2 for bad input.
+    """
+    scene = load_scene(scene_file)
+    click.echo("\n".join(describe_scene(scene)))
+    for message in scene.warnings():
+        click.echo(f"halfslip: warning: {message}", err=True)
+
+
+def describe_scene(scene: Scene) -> list[str]:
+    """Return the lines ``halfslip validate`` prints for `scene`."""
+    material, solver, output = scene.material, scene.solver, scene.output
+    lines = [
+        f"scene      {scene.name}" + (f"  ({scene.path})" if scene.path is not None else ""),
+        f"material   E = {material.E:.6g} Pa, nu = {material.nu:g}, A = 4(1 - nu^2)/E = {material.compliance:.6g} 1/Pa",
+        f"friction   f = {scene.friction:g}",
+        f"geometry   {describe_profile(scene.profile)}",
+        f"solver     method = {solver.method}, nodes = {solver.nodes}, "
+        f"skip_steady_cycles = {str(solver.skip_steady_cycles).lower()}",
+        f"output     fields = [{', '.join(output.fields)}], every = {output.every}, points = {output.points}",
+        "",
+    ]
+    history = scene.history
+    lines.append(
+        f"history    {len(history.segments)} segments, {history.n_steps} steps, t = 0 .. {history.duration:g} s"
+    )
+    lines.append(f"  {'#':>3}  {'kind':<7} {'line':>5}  {'t from [s]':>11} {'t to [s]':>11} {'steps':>7}")
+    for index, segment in enumerate(history.segments):
+        line = str(segment.line) if segment.line is not None else "-"
+        text = (
+            f"  {index:>3}  {segment.kind:<7} {line:>5}  {segment.t_start:>11.6g} {segment.t_stop:>11.6g}"
+            f" {segment.steps:>7}"
+        )
+        if segment.kind == "cycles":
+            text += f"  {segment.count} x {segment.period:g} s, {segment.steps_per_cycle} steps per cycle"
+        if segment.source is not None:
+            text += f"  from {segment.source}"
+        lines.append(text)
+    lines.append(f"  {'load':<6} {'min':>12} {'max':>12}")
+    for name, (low, high) in history.ranges().items():
+        lines.append(f"  {name:<6} {low:>12.6g} {high:>12.6g}  {_UNITS[name]}")
+    lines.append(f"  max |Q|/(fP) = {history.max_shear_ratio(scene.friction):.4g}")
+    return lines
+
+
+def describe_profile(profile: Any) -> str:
+    """Return ``kind: parameter = value, ...`` for a geometry profile."""
+    if isinstance(profile, Hertz):
+        return f"hertz: radius = {profile.radius:.6g} m"
+    if isinstance(profile, RoundedPunch):
+        return f"rounded_punch: flat_half_width = {profile.flat_half_width:.6g} m, radius = {profile.radius:.6g} m"
+    if isinstance(profile, TabulatedProfile):
+        shape = "symmetric" if profile.symmetric else "asymmetric"
+        return (
+            f"profile: {profile.x.size} samples, x in [{profile.x[0]:.6g}, {profile.x[-1]:.6g}] m, "
+            f"h up to {profile.h.max():.6g} m, {shape}"
+        )
+    return repr(profile)

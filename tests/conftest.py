@@ -1,0 +1,24 @@
+"""Shared fixtures."""
+from __future__ import annotations
+
+import inspect
+
+import pytest
+from click.testing import CliRunner, Result
+
+from halfslip.cli import main
+
+
+@pytest.fixture
+def cli():
+    """Run the halfslip command line in-process: ``cli("validate", path)``.
+
+    The result has separate ``stdout`` and ``stderr``.
+    """
+    # click < 8.2 mixes stderr into stdout unless told not to
+    separate = {"mix_stderr": False} if "mix_stderr" in inspect.signature(CliRunner).parameters else {}
+
+    def invoke(*args: object) -> Result:
+        return CliRunner(**separate).invoke(main, [str(arg) for arg in args])
+
+    return invoke
