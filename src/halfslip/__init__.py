@@ -9,6 +9,7 @@ from .errors import HalfslipInputError
 from .geometry import Hertz, Material, NormalProblem, RoundedPunch, TabulatedProfile
 from .histories import LoadHistory, Segment
 from .scene import OutputOptions, Scene, SolverOptions, load_scene, parse_scene
+from .simulator import simulate
 
 try:
     __version__ = version("halfslip")
@@ -30,4 +31,5 @@ __all__ = [
     "__version__",
     "load_scene",
     "parse_scene",
+    "simulate",
 ]

@@ -107,3 +107,107 @@ def describe_profile(profile: Any) -> str:
             f"h up to {profile.h.max():.6g} m, {shape}"
         )
     return repr(profile)
+
+
+class _Progress:
+    """Progress on a terminal, for runs longer than a second; silent otherwise."""
+
+    def __init__(self, enabled: bool):
+        import time
+
+        self._clock = time.perf_counter
+        self.enabled = enabled
+        self.started = self._clock()
+        self.last = self.started
+        self.shown = False
+
+    def __call__(self, i: int, n: int) -> None:
+        if not self.enabled:
+            return
+        now = self._clock()
+        if now - self.started < 1.0 or (now - self.last < 0.2 and i < n):
+            return
+        self.last = now
+        rate = i / (now - self.started)
+        left = (n - i) / rate if rate > 0 else float("nan")
+        click.echo(f"\r  step {i}/{n}  {100 * i / n:5.1f} %  {rate:,.0f} steps/s  {left:6.1f} s left ", nl=False, err=True)
+        self.shown = True
+
+    def close(self) -> None:
+        if self.shown:
+            click.echo("", err=True)
+
+
+@main.command()
+@click.argument("scene_file", metavar="SCENE.yaml")
+@click.option("-o", "--output", "output", metavar="OUT.h5", help="Result file (default: the scene name with .h5, here).")
+@click.option("--method", type=click.Choice(["auto", "exact", "general"]), help="Override solver.method.")
+@click.option("--nodes", type=click.IntRange(min=8), help="Override solver.nodes (general solver).")
+@click.option("--quiet", is_flag=True, help="Print nothing but errors.")
+def run(scene_file: str, output: str | None, method: str | None, nodes: int | None, quiet: bool) -> None:
+    """March a scene's load history and write the result dataset (HDF5).
+
+    Ctrl-C or SIGTERM stops the run and writes every completed step, marked
+    incomplete (attribute ``complete = 0``); the exit status is then 130.
+    """
+    import signal
+    import sys
+    from pathlib import Path
+
+    from .io import write_result
+    from .simulator import MethodError, simulate
+
+    scene = load_scene(scene_file)
+    out = Path(output) if output else Path(f"{Path(scene_file).stem}.h5")
+    if out.parent and not out.parent.exists():
+        raise HalfslipInputError(f"folder {str(out.parent)!r} does not exist", field="-o")
+
+    def _terminate(signum, frame):  # SIGTERM behaves like Ctrl-C: stop and keep what is done
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, _terminate)
+    progress = _Progress(enabled=not quiet and sys.stderr.isatty())
+    try:
+        result = simulate(scene, method=method, nodes=nodes, progress=progress)
+    except MethodError as error:
+        raise HalfslipInputError(str(error), file=str(scene.path) if scene.path else None, field="solver.method") from None
+    finally:
+        progress.close()
+        signal.signal(signal.SIGTERM, previous)
+    write_result(result, out)
+    if not quiet:
+        click.echo("\n".join(summarize(result, out)))
+    if not result.attrs["complete"]:
+        click.echo(f"halfslip: interrupted; {result.sizes['t']} stored steps written to {out}", err=True)
+        sys.exit(130)
+
+
+def summarize(result, path) -> list[str]:
+    """The lines ``halfslip run`` prints when done."""
+    import numpy as np
+
+    from .state import Regime
+
+    regime = result["regime"].values[1:] if result.sizes["t"] > 1 else result["regime"].values
+    steps = int(result.attrs["count_steps"])
+    wall = float(result.attrs["wall_time"])
+    lines = [
+        f"halfslip run of {result.attrs['scene_name']}: {steps} steps, method {result.attrs['method']}, "
+        f"{wall:.3g} s ({steps / wall if wall > 0 else float('inf'):,.0f} steps/s)",
+        "  regimes of stored steps: "
+        + ", ".join(
+            f"{r.name.lower().replace('_', ' ')} {100 * np.mean(regime == r):.1f} %"
+            for r in Regime
+            if np.any(regime == r)
+        ),
+    ]
+    last = result.isel(t=-1)
+    lines.append(
+        f"  final contact [{float(last.contact_left):.6g}, {float(last.contact_right):.6g}] m, "
+        f"stick zone [{float(last.stick_left):.6g}, {float(last.stick_right):.6g}] m"
+    )
+    lines.append(f"  dissipated {float(last.dissipation):.6g} J/m")
+    for message in filter(None, str(result.attrs.get("messages", "")).split("\n")):
+        lines.append(f"  note: {message}")
+    lines.append(f"  written to {path}")
+    return lines

@@ -343,7 +343,13 @@ class ExactMemory:
         """Advance ``state`` to time ``t1`` and loads ``loads1`` along a straight line."""
         mem, regime, stick_level, dD = self.advance_memory(state.memory, loads1.P, loads1.Q)
         mem = self._track_arrivals(state, mem, loads1)
-        a = float(self.problem.half_width(mem.P[-1])) if regime != Regime.SEPARATED else float("nan")
+        P_changed = loads1.P != state.loads.P
+        if regime == Regime.SEPARATED:
+            a = float("nan")
+        elif P_changed or math.isnan(state.contact_right):
+            a = float(self.problem.half_width(mem.P[-1]))  # the normal problem, M = 0: a(P)
+        else:
+            a = state.contact_right  # P unchanged: reuse the normal solution
         if regime in (Regime.STICK, Regime.PARTIAL_SLIP):
             b = a if regime == Regime.STICK else float(self.problem.half_width(stick_level))
             stick = (-b, b)
@@ -363,7 +369,7 @@ class ExactMemory:
             dissipation=state.dissipation + dD,
             memory=mem,
         )
-        report = StepReport(regime, regime in (Regime.PARTIAL_SLIP, Regime.GROSS_SLIDING), False, message)
+        report = StepReport(regime, regime in (Regime.PARTIAL_SLIP, Regime.GROSS_SLIDING), P_changed, message)
         return new_state, report
 
     # -- reconstruction ---------------------------------------------------

@@ -1,0 +1,71 @@
+"""End to end: scene -> simulate -> HDF5 -> xarray / h5py, and the run command."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+import xarray as xr
+from click.testing import CliRunner
+
+import halfslip as hs
+from halfslip.cli import main
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+INTERFACE_VARIABLES = [
+    "P", "Q", "M", "sigma", "contact_left", "contact_right", "stick_left", "stick_right",
+    "regime", "shift", "dissipation", "p", "q", "slip",
+]
+
+
+def test_run_hertz_example_writes_every_interface_variable(tmp_path):
+    out = tmp_path / "hertz.h5"
+    result = CliRunner().invoke(main, ["run", str(EXAMPLES / "hertz_pad.yaml"), "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    assert "partial slip" in result.output and str(out) in result.output
+    with xr.open_dataset(out) as ds:
+        for name in INTERFACE_VARIABLES + ["t", "x"]:
+            assert name in ds.variables, name
+            assert ds[name].attrs["units"] and ds[name].attrs["long_name"], name
+        assert ds.attrs["method"] == "exact"
+        assert ds.attrs["halfslip_version"] == hs.__version__
+        assert "hertz-pad" in ds.attrs["scene"]
+        assert ds["regime"].attrs["flag_meanings"].split() == ["separated", "stick", "partial_slip", "gross_sliding"]
+        assert ds.sizes["t"] == 1 + 20 + 20 * 100
+        # constant P after the ramp: the normal problem is solved on the ramp steps only
+        assert ds.attrs["count_normal_solves"] == 20
+        assert ds.attrs["count_stick_steps"] == 20
+    with h5py.File(out, "r") as f:
+        assert f["q"].shape == (2021, 201)
+
+
+def test_output_every_and_fields_control_storage(tmp_path):
+    scene = hs.load_scene(EXAMPLES / "hertz_pad.yaml")
+    import dataclasses
+
+    scene = dataclasses.replace(scene, output=dataclasses.replace(scene.output, fields=("q",), every=7))
+    ds = hs.simulate(scene)
+    n = scene.history.n_steps
+    assert ds.sizes["t"] == 1 + n // 7 + (n % 7 != 0)
+    assert "q" in ds and "p" not in ds and "slip" not in ds
+    extents = hs.simulate(dataclasses.replace(scene, output=dataclasses.replace(scene.output, fields=())))
+    assert "x" not in extents.dims
+    # storing fields or not changes nothing in the extents
+    np.testing.assert_array_equal(extents["stick_right"].values, ds["stick_right"].values)
+    np.testing.assert_array_equal(extents["dissipation"].values, ds["dissipation"].values)
+
+
+def test_exact_method_on_a_scene_it_cannot_serve_is_a_clear_error(tmp_path):
+    result = CliRunner().invoke(main, ["run", str(EXAMPLES / "dovetail.yaml"), "--method", "exact",
+                                       "-o", str(tmp_path / "d.h5")])
+    assert result.exit_code == 2
+    assert "method 'exact' cannot serve this scene" in result.output
+    assert "moment" in result.output
+    assert "Traceback" not in result.output
+    assert not (tmp_path / "d.h5").exists()
+
+
+def test_auto_picks_exact_for_symmetric_scene_without_moment_or_tension():
+    scene = hs.load_scene(EXAMPLES / "motor.yaml")
+    assert hs.simulate(scene).attrs["method"] == "exact"
