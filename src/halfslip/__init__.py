@@ -10,6 +10,7 @@ from .geometry import Hertz, Material, NormalProblem, RoundedPunch, TabulatedPro
 from .histories import LoadHistory, Segment
 from .scene import OutputOptions, Scene, SolverOptions, load_scene, parse_scene
 from .simulator import simulate
+from .steady import steady_state
 
 try:
     __version__ = version("halfslip")
@@ -32,4 +33,5 @@ __all__ = [
     "load_scene",
     "parse_scene",
     "simulate",
+    "steady_state",
 ]

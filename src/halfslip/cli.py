@@ -211,3 +211,35 @@ def summarize(result, path) -> list[str]:
         lines.append(f"  note: {message}")
     lines.append(f"  written to {path}")
     return lines
+
+
+@main.command()
+@click.argument("scene_file", metavar="SCENE.yaml")
+@click.option("--segment", type=int, help="Index of the cycles segment (default: the last one).")
+@click.option("-o", "--output", "output", metavar="OUT.h5", help="Also write the steady-state dataset.")
+def steady(scene_file: str, segment: int | None, output: str | None) -> None:
+    """Permanent stick zone of the cyclic part of a scene, found directly."""
+    from .steady import steady_state
+
+    scene = load_scene(scene_file)
+    ds = steady_state(scene, segment)
+    regime = int(ds["regime"])
+    names = {1: "full stick (shakedown)", 2: "partial slip", 3: "gross sliding"}
+    rows = [
+        ("scene", scene.name),
+        ("method", ds.attrs["method"]),
+        ("regime", names.get(regime, str(regime))),
+        ("permanent stick left [m]", f"{float(ds.permanent_stick_left):.6g}"),
+        ("permanent stick right [m]", f"{float(ds.permanent_stick_right):.6g}"),
+    ]
+    if "dissipation_per_cycle" in ds:
+        rows.append(("dissipation per cycle [J/m]", f"{float(ds.dissipation_per_cycle):.6g}"))
+        rows.append(("peak slip amplitude [m]", f"{float(ds.peak_slip_amplitude):.6g}"))
+    width = max(len(k) for k, _ in rows)
+    for key, value in rows:
+        click.echo(f"{key:<{width}}  {value}")
+    click.echo(f"note: {ds.attrs['note']}")
+    if output:
+        from .io import write_result
+
+        write_result(ds, output)

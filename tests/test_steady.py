@@ -1,0 +1,95 @@
+"""Direct steady state against marching, and the cycle-skipping machinery."""
+from __future__ import annotations
+
+import dataclasses
+import math
+import textwrap
+
+import numpy as np
+import pytest
+
+import halfslip as hs
+from halfslip.steady import motor_stick_level
+
+HERTZ_SCENE = """
+name: steady-hertz
+material: {{E: 200.0e9, nu: 0.3}}
+friction: 0.6
+geometry: {{kind: hertz, radius: 50.0e-3}}
+loads:
+  - ramp: {{to: {{P: {P0}, Q: {Q0}}}, duration: 1.0, steps: 10}}
+  - cycles:
+      count: {count}
+      period: 1.0
+      steps_per_cycle: {spc}
+      P: {{amplitude: {Pa}, phase: 0.0}}
+      Q: {{mean: {Qm}, amplitude: {Qa}, phase: {phase}}}
+output: {{fields: [], every: 1}}
+solver: {{skip_steady_cycles: false}}
+"""
+
+
+def marched_permanent_stick(ds, spc):
+    last = ds.isel(t=slice(-spc, None))
+    return float(last.stick_left.max()), float(last.stick_right.min())
+
+
+def hertz_scene(P0=1e5, Qm=0.0, Pa=0.0, Qa=2e4, phase=0.0, count=20, spc=400):
+    """Ramp to the loop's starting point, then harmonic P and Q about (P0, Qm)."""
+    Q0 = Qm + Qa * math.sin(math.radians(phase))
+    return hs.parse_scene(textwrap.dedent(HERTZ_SCENE.format(
+        P0=P0, Q0=Q0, Qm=Qm, Pa=Pa, Qa=Qa, phase=phase, count=count, spc=spc)))
+
+
+def test_hertz_ss2_closed_form_equals_marching():
+    """(SS2) at constant P; the turning points are sampled exactly, so 1e-10."""
+    scene = hertz_scene(Qa=2.5e4)
+    steady = hs.steady_state(scene)
+    assert steady.attrs["method"] == "SS2 closed form"
+    A, R, f = scene.material.compliance, 50e-3, 0.6
+    a2 = 2 * A * R * 1e5 / math.pi
+    d = math.sqrt(a2 - A * R * 5e4 / (math.pi * f))
+    assert float(steady.permanent_stick_right) == pytest.approx(d, rel=1e-12)
+    ds = hs.simulate(scene)
+    left, right = marched_permanent_stick(ds, 400)
+    assert right == pytest.approx(d, rel=1e-10)
+    assert left == pytest.approx(-d, rel=1e-10)
+
+
+@pytest.mark.parametrize("Pa, Qa, phase, Qm", [(3e4, 3e4, 90.0, 0.0), (5e4, 2.5e4, 60.0, 1e4), (2e4, 3.5e4, 120.0, -5e3)])
+def test_motor_point_T_equals_marching(Pa, Qa, phase, Qm):
+    """a(P_T) against 20 marched cycles; the tangency falls between samples: O(dtheta^2)
+    with 1000 steps per cycle ~ 4e-5 relative in P_T, 2e-5 in a; tolerance 1e-4."""
+    scene = hertz_scene(Pa=Pa, Qa=Qa, phase=phase, Qm=Qm, spc=1000)
+    steady = hs.steady_state(scene, per_cycle=False)
+    assert steady.attrs["method"].startswith("Barber-Davies-Hills")
+    ds = hs.simulate(scene)
+    left, right = marched_permanent_stick(ds, 1000)
+    assert right == pytest.approx(float(steady.permanent_stick_right), rel=1e-4)
+    assert left == pytest.approx(float(steady.permanent_stick_left), rel=1e-4)
+
+
+def test_motor_closed_form_P_T_against_dense_loop():
+    h = {k: v for k, v in hertz_scene(Pa=3e4, Qa=3e4, phase=70.0, Qm=1e3).history.segments[1].harmonics.items()}
+    th = np.linspace(0, 2 * np.pi, 1_000_001)
+    P = h["P"].mean + h["P"].amplitude * np.sin(th + h["P"].phase)
+    Q = h["Q"].mean + h["Q"].amplitude * np.sin(th + h["Q"].phase)
+    dense = (np.min(Q + 0.6 * P) - np.max(Q - 0.6 * P)) / 1.2
+    assert motor_stick_level(h, 0.6) == pytest.approx(dense, rel=1e-10)
+
+
+def test_gross_sliding_is_said_plainly():
+    scene = hertz_scene(Qa=7e4)
+    steady = hs.steady_state(scene, per_cycle=False)
+    assert int(steady.regime) == 3
+    assert np.isnan(float(steady.permanent_stick_right))
+
+
+def test_in_phase_P_and_Q_within_the_cone_shakes_down_to_full_stick():
+    """In-phase P and Q with abs(dQ) < f dP pass the finite-range S1 test: full stick."""
+    scene = hertz_scene(Pa=3e4, Qa=1e4, phase=0.0)
+    steady = hs.steady_state(scene, per_cycle=False)
+    assert int(steady.regime) == 1
+    ds = hs.simulate(scene)
+    regime = ds.regime.values[-400:]
+    assert np.all(regime == 1)
