@@ -93,3 +93,34 @@ def test_in_phase_P_and_Q_within_the_cone_shakes_down_to_full_stick():
     ds = hs.simulate(scene)
     regime = ds.regime.values[-400:]
     assert np.all(regime == 1)
+
+
+def test_cycle_skipping_matches_full_marching():
+    """Skipping the repeated cycles changes neither the final state nor the dissipation (1e-12)."""
+    full_scene = hertz_scene(Pa=3e4, Qa=3e4, phase=90.0, count=30, spc=100)
+    scene = dataclasses.replace(full_scene, solver=dataclasses.replace(full_scene.solver, skip_steady_cycles=True))
+    skipped = hs.simulate(scene)
+    full = hs.simulate(full_scene)
+    assert full.attrs["skipped_cycles"] == 0
+    assert skipped.attrs["skipped_cycles"] >= 25
+    assert skipped.attrs["count_steps"] < full.attrs["count_steps"] / 5
+    for name in ("t", "stick_left", "stick_right", "shift", "contact_right"):
+        assert float(skipped[name][-1]) == pytest.approx(float(full[name][-1]), rel=1e-12)
+    assert float(skipped.dissipation[-1]) == pytest.approx(float(full.dissipation[-1]), rel=1e-12)
+
+
+def test_counters_constant_P_one_normal_solve_and_full_stick_no_slip_solve():
+    t = np.linspace(0.0, 10.0, 201)
+    P = np.full_like(t, 1e5)
+    P[0] = 0.0
+    Q = 0.3 * 0.6 * 1e5 * np.sin(t)
+    Q[0] = 0.0
+    base = hertz_scene()
+    const_P = dataclasses.replace(base, history=hs.LoadHistory.from_arrays(t, P, Q))
+    ds = hs.simulate(const_P)
+    assert ds.attrs["count_normal_solves"] == 1
+    # P and Q rising together inside the friction cone: full stick, never a slip solve
+    ramp = dataclasses.replace(base, history=hs.LoadHistory.from_arrays(t, 1e5 * t, 0.3 * 0.6 * 1e5 * t))
+    ds = hs.simulate(ramp)
+    assert ds.attrs["count_slip_solves"] == 0
+    assert np.all(ds.regime.values[1:] == 1)

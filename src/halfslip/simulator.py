@@ -6,6 +6,7 @@ never writes output. What is stored is decided here by :class:`SaveAt`.
 """
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 from typing import Callable
@@ -160,8 +161,6 @@ def simulate(
     from . import __version__
 
     if nodes is not None:
-        import dataclasses
-
         scene = dataclasses.replace(scene, solver=dataclasses.replace(scene.solver, nodes=int(nodes)))
     name = choose_method(scene, method)
     problem = NormalProblem(scene.profile, scene.material.compliance)
@@ -180,9 +179,11 @@ def simulate(
         rec.add_fields(_fields(solver, state, save))
     complete = 1
     messages: list[str] = []
+    skipping = CycleSkipper(h, solver) if scene.solver.skip_steady_cycles else None
     started = time.perf_counter()
     try:
-        for i in range(1, n + 1):
+        i = 1
+        while i <= n:
             loads1 = Loads(float(h.P[i]), float(h.Q[i]), float(h.M[i]), float(h.sigma[i]))
             state, report = solver.step(state, float(h.t[i]), loads1)
             counters["steps"] += 1
@@ -191,12 +192,17 @@ def simulate(
             counters["normal_solves"] += report.normal_solved
             if report.message and report.message not in messages:
                 messages.append(report.message)
-            if save.stored(i, n):
+            if skipping is not None:
+                jump = skipping.check(i, state)
+                if jump is not None:
+                    i, state = jump
+            if save.stored(i, n) or (skipping is not None and skipping.jumped_to == i):
                 rec.add(state, report.regime)
                 if fields:
                     rec.add_fields(_fields(solver, state, save))
             if progress is not None:
                 progress(i, n)
+            i += 1
     except KeyboardInterrupt:
         complete = 0
     elapsed = time.perf_counter() - started
@@ -214,10 +220,60 @@ def simulate(
             "shift_datum": getattr(solver, "datum", float("nan")),
             "wall_time": elapsed,
             "messages": "\n".join(messages),
+            "skipped_cycles": 0 if skipping is None else skipping.total,
+            "skipped_cycles_per_segment": "" if skipping is None else skipping.describe(),
             **{f"count_{k}": v for k, v in counters.items()},
         }
     )
     return ds
+
+
+class CycleSkipper:
+    """Stops marching a ``cycles`` segment once its cycle repeats.
+
+    After each full cycle the state is compared (``solver.same_state``, to the
+    solver's tolerance) with the state one cycle earlier. When they agree the
+    remaining cycles are skipped: time jumps to the segment's end, the state is
+    the repeated one, and the dissipation grows by the remaining cycles times
+    the dissipation of the last cycle -- exact, since every cycle from then on
+    is the same. Every cycle of a segment is sampled bit-identically, so the
+    state at the segment's end is the state at the end of any steady cycle.
+    """
+
+    def __init__(self, history, solver):
+        self.same = getattr(solver, "same_state", None)
+        self.ends = {}  # step index of a cycle end -> (segment index, segment)
+        for k, seg in enumerate(history.segments):
+            if seg.kind == "cycles" and seg.count and seg.count > 2:
+                for j in range(1, seg.count):
+                    self.ends[seg.start + j * seg.steps_per_cycle] = (k, seg)
+        self.t = history.t
+        self.previous = {}
+        self.skipped = {}
+        self.jumped_to = None
+
+    @property
+    def total(self) -> int:
+        return sum(self.skipped.values())
+
+    def describe(self) -> str:
+        return ", ".join(f"loads[{k}]: {v}" for k, v in sorted(self.skipped.items()))
+
+    def check(self, i: int, state: ContactState):
+        """Return (new index, new state) when the rest of the segment is skipped."""
+        if self.same is None or i not in self.ends:
+            return None
+        k, seg = self.ends[i]
+        prev = self.previous.get(k)
+        self.previous[k] = state
+        if prev is None or not self.same(prev, state):
+            return None
+        remaining = (seg.stop - i) // seg.steps_per_cycle
+        per_cycle = state.dissipation - prev.dissipation
+        self.skipped[k] = remaining
+        self.jumped_to = seg.stop
+        new = dataclasses.replace(state, t=float(self.t[seg.stop]), dissipation=state.dissipation + remaining * per_cycle)
+        return seg.stop, new
 
 
 def _fields(solver, state: ContactState, save: SaveAt) -> dict:

@@ -62,27 +62,27 @@ def coefficients(values: np.ndarray) -> np.ndarray:
     return gamma
 
 
-def linear_moments(x: np.ndarray, y: np.ndarray, b1: float, b2: float) -> tuple[float, float]:
+def linear_moments(x: np.ndarray, y: np.ndarray, b1: float, b2: float) -> tuple[np.ndarray, np.ndarray]:
     """Exact (gamma_0, gamma_1) of the piecewise-linear interpolant of (x, y) on [b1, b2].
 
     Parameters
     ----------
     x : ndarray, shape (n,)
         Increasing abscissae with x[0] <= b1 < b2 <= x[-1].
-    y : ndarray, shape (n,)
-        Values.
+    y : ndarray, shape (n,) or (n, k)
+        Values (k functions at once).
     b1, b2 : float
         The interval.
 
     Returns
     -------
-    gamma0, gamma1 : float
+    gamma0, gamma1 : ndarray, shape () or (k,)
         (1/pi) int G dth and (2/pi) int G cos th dth, x = m + r cos th.
     """
-    lo = np.searchsorted(x, b1, side="right")
-    hi = np.searchsorted(x, b2, side="left")
-    y1 = np.interp(b1, x, y)
-    y2 = np.interp(b2, x, y)
+    lo = int(np.searchsorted(x, b1, side="right"))
+    hi = int(np.searchsorted(x, b2, side="left"))
+    y1 = _lerp(x, y, b1, lo)
+    y2 = _lerp(x, y, b2, hi)
     xs = np.concatenate(([b1], x[lo:hi], [b2]))
     ys = np.concatenate(([y1], y[lo:hi], [y2]))
     m = 0.5 * (b1 + b2)
@@ -92,17 +92,26 @@ def linear_moments(x: np.ndarray, y: np.ndarray, b1: float, b2: float) -> tuple[
     th = np.arctan2(sin_th, cos_th)
     dx = np.diff(xs)
     keep = dx > 0.0
-    slope = np.where(keep, np.diff(ys) / np.where(keep, dx, 1.0), 0.0)
-    alpha = ys[:-1] + slope * (m - xs[:-1])
+    shape = (-1,) + (1,) * (ys.ndim - 1)
+    slope = np.diff(ys, axis=0) / np.where(keep, dx, 1.0).reshape(shape)
+    slope = np.where(keep.reshape(shape), slope, 0.0)
+    alpha = ys[:-1] + slope * (m - xs[:-1]).reshape(shape)
     beta = slope * r
-    # piece j runs from th[j] (left end, larger angle) down to th[j + 1]
-    d_th = th[:-1] - th[1:]
-    d_sin = sin_th[:-1] - sin_th[1:]
+    # piece j runs from th[j] (its left end, the larger angle) down to th[j + 1]
+    d_th = (th[:-1] - th[1:]).reshape(shape)
+    d_sin = (sin_th[:-1] - sin_th[1:]).reshape(shape)
     sin2 = 2.0 * sin_th * cos_th
-    d_sin2 = sin2[:-1] - sin2[1:]
-    gamma0 = float(np.sum(alpha * d_th + beta * d_sin)) / math.pi
-    gamma1 = 2.0 * float(np.sum(alpha * d_sin + beta * (0.5 * d_th + 0.25 * d_sin2))) / math.pi
+    d_sin2 = (sin2[:-1] - sin2[1:]).reshape(shape)
+    gamma0 = np.sum(alpha * d_th + beta * d_sin, axis=0) / math.pi
+    gamma1 = 2.0 * np.sum(alpha * d_sin + beta * (0.5 * d_th + 0.25 * d_sin2), axis=0) / math.pi
     return gamma0, gamma1
+
+
+def _lerp(x: np.ndarray, y: np.ndarray, at: float, i: int) -> np.ndarray:
+    """Linear interpolation of rows of y at ``at``, x[i - 1] <= at <= x[i]."""
+    i = min(max(i, 1), x.size - 1)
+    w = (at - x[i - 1]) / (x[i] - x[i - 1])
+    return y[i - 1] + w * (y[i] - y[i - 1])
 
 
 def bounded_inside(gamma: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -127,6 +136,103 @@ def bounded_inside(gamma: np.ndarray, t: np.ndarray) -> np.ndarray:
     return np.where(np.abs(t) <= 1.0, out, 0.0)
 
 
+def bounded_linear(s: np.ndarray, g: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Exact bounded solution phi(t) for G piecewise linear through (s, g) on [-1, 1].
+
+    With G(s) = a + b s + sum_k c_k abs(s - s_k) (c_k half the slope jumps at
+    the interior knots) and t = cos th0, s_k = cos th_k,
+
+        phi(t) = b sin th0 + sum_k c_k [ sin th0 (2 th_k - pi) / pi
+                 + (2/pi) (t - s_k) ln abs(sin((th0 + th_k)/2) / sin((th0 - th_k)/2)) ],
+
+    which is (sqrt(1 - t^2)/pi) PV int G(s) / (sqrt(1 - s^2)(s - t)) ds: the
+    solution bounded at both ends for G - gamma_0.
+
+    Parameters
+    ----------
+    s : ndarray, shape (m,)
+        Knots, increasing, s[0] = -1, s[-1] = 1.
+    g : ndarray, shape (m,)
+        G at the knots.
+    t : ndarray, shape (n,)
+        Points in [-1, 1].
+
+    Returns
+    -------
+    ndarray, shape (n,)
+    """
+    t = np.clip(np.asarray(t, dtype=float), -1.0, 1.0)
+    ds = np.diff(s)
+    keep = ds > 0.0
+    slope = np.diff(g)[keep] / ds[keep]
+    knots = s[:-1][keep][1:]
+    c = 0.5 * np.diff(slope)
+    b = slope[0] + np.sum(c)
+    th0 = np.arccos(t)
+    sin0 = np.sin(th0)
+    thk = np.arccos(knots)
+    out = b * sin0 + sin0 * (np.sum(c * (2.0 * thk - math.pi)) / math.pi)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.sin(0.5 * (th0[:, None] + thk)) / np.sin(0.5 * (th0[:, None] - thk))
+        term = (t[:, None] - knots) * np.log(np.abs(ratio))
+    term = np.where(np.isfinite(term), term, 0.0)
+    return out + (2.0 / math.pi) * (term @ c)
+
+
+def hilbert_linear_outside(s: np.ndarray, g: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Exact sum_{k>=1} gamma_k rho^k for G piecewise linear through (s, g), abs(t) > 1.
+
+    For t > 1, with G = a + b s + sum_k c_k abs(s - s_k) and s_k = cos th_k,
+
+        sgn(t) sqrt(t^2 - 1) (1/pi) int G(s) / (sqrt(1 - s^2)(t - s)) ds
+            = a + b rho + sum_k c_k [ sqrt(t^2 - 1)(pi - 2 th_k)/pi
+                                      + (t - s_k)(4 atan(sqrt((t+1)/(t-1)) tan(th_k/2)) - pi)/pi ],
+
+    which equals gamma_0 + sum_{k>=1} gamma_k rho^k; gamma_0 is subtracted.
+    t < -1 follows by reflection (s -> -s). This is the outside strain of the
+    bounded solution, accurate right up to the interval's end where the
+    Chebyshev series converges slowly.
+
+    Parameters
+    ----------
+    s, g : ndarray, shape (m,)
+        Knots (s[0] = -1, s[-1] = 1) and values.
+    t : ndarray, shape (n,), abs(t) > 1
+
+    Returns
+    -------
+    ndarray, shape (n,)
+    """
+    t = np.asarray(t, dtype=float)
+    out = np.empty(t.shape)
+    right = t > 0.0
+    if np.any(right):
+        out[right] = _outside_right(s, g, t[right])
+    if np.any(~right):
+        out[~right] = _outside_right(-s[::-1], g[::-1], -t[~right])
+    return out
+
+
+def _outside_right(s, g, t):
+    ds = np.diff(s)
+    keep = ds > 0.0
+    slope = np.diff(g)[keep] / ds[keep]
+    knots = s[:-1][keep][1:]
+    c = 0.5 * np.diff(slope)
+    b = slope[0] + np.sum(c)
+    a = g[0] + b - np.sum(c * (knots + 1.0))
+    thk = np.arccos(knots)
+    # gamma_0 of G: (1/pi) int (a + b cos th + sum c_k abs(cos th - s_k)) dth
+    gamma0 = a + np.sum(c * (2.0 * np.sin(thk) + (math.pi - 2.0 * thk) * knots)) / math.pi
+    root = np.sqrt(np.maximum(t * t - 1.0, 0.0))
+    with np.errstate(divide="ignore"):
+        stretch = np.sqrt((t + 1.0) / np.maximum(t - 1.0, 0.0))
+    hinge = root[:, None] * (math.pi - 2.0 * thk) / math.pi + (t[:, None] - knots) * (
+        4.0 * np.arctan(stretch[:, None] * np.tan(0.5 * thk)) - math.pi
+    ) / math.pi
+    return a + b / (t + root) + hinge @ c - gamma0
+
+
 def hilbert_outside(gamma: np.ndarray, t: np.ndarray) -> np.ndarray:
     """(1/pi) int phi(tau) / (t - tau) dtau = sum_{k>=1} gamma_k rho^k for |t| >= 1.
 
@@ -141,10 +247,11 @@ def hilbert_outside(gamma: np.ndarray, t: np.ndarray) -> np.ndarray:
     """
     c = np.array(gamma, dtype=float)
     c[0] = 0.0
-    return np.polynomial.polynomial.polyval(_rho(t), c)
+    return np.polynomial.polynomial.polyval(rho(t), c)
 
 
-def _rho(t: np.ndarray) -> np.ndarray:
+def rho(t: np.ndarray) -> np.ndarray:
+    """rho = t - sgn(t) sqrt(t^2 - 1) for abs(t) >= 1, computed without cancellation."""
     t = np.asarray(t, dtype=float)
     root = np.sqrt(np.maximum(t * t - 1.0, 0.0))
     # t - sgn(t) sqrt(t^2 - 1) = sgn(t) / (|t| + sqrt(t^2 - 1)), without cancellation
@@ -193,7 +300,7 @@ def log_potential(a: np.ndarray, t: float) -> float:
         lam0 = 0.5 * t * t - 0.25 - 0.5 * _LN2
         lam = np.cos((k + 2) * th) / (2.0 * (k + 2)) - np.cos(k * th) / (2.0 * k)
     else:
-        rho = float(_rho(np.array(t)))
-        lam0 = 0.25 * rho * rho - 0.5 * math.log(abs(rho)) - 0.5 * _LN2
-        lam = -0.5 * (rho**k / k - rho ** (k + 2) / (k + 2))
+        r = float(rho(np.array(t)))
+        lam0 = 0.25 * r * r - 0.5 * math.log(abs(r)) - 0.5 * _LN2
+        lam = -0.5 * (r**k / k - r ** (k + 2) / (k + 2))
     return float(a[0] * lam0 + np.dot(a[1:], lam))

@@ -86,6 +86,9 @@ class Shear:
     fixup : float
         Force [N/m] added as (2 / (pi r^2)) sqrt(r^2 - (x - m)^2) on the stick
         interval when the extra force F could not close equilibrium (0 normally).
+    knots : tuple of ndarray, shape (m,) each, or None
+        (t_k, G_k): G piecewise linear on the stick interval in t = (x - m) / r,
+        for the exact inversion (None for opposite signs, where G has the ramp term).
     """
 
     left: float
@@ -96,6 +99,7 @@ class Shear:
     coef: np.ndarray
     ramp: float
     fixup: float
+    knots: tuple | None = None
 
     @property
     def center(self) -> float:
@@ -116,11 +120,25 @@ class Shear:
             out = out + extra * np.where(x <= b1, p, np.where(x < b2, ramp, 0.0))
         return out
 
-    def evaluate(self, x: np.ndarray, p: np.ndarray, friction: float) -> np.ndarray:
-        """q(x) given p(x), shape of x (0 outside the contact)."""
+    def evaluate(self, x: np.ndarray, p: np.ndarray, friction: float, exact: bool = False) -> np.ndarray:
+        """q(x) given p(x), shape of x (0 outside the contact).
+
+        ``exact`` inverts the piecewise-linear stick data in closed form
+        (``sie.bounded_linear``, cost ~ points x knots) instead of summing the
+        Chebyshev series (whose truncation error is largest next to a kink of G).
+        """
         x = np.asarray(x, dtype=float)
+        q = friction * self.chi_p(x, p)
+        if self.radius == 0.0:  # gross sliding: no stick interval
+            return np.where((x > self.left) & (x < self.right), q, 0.0)
         t = (x - self.center) / self.radius
-        q = friction * self.chi_p(x, p) + sie.bounded_inside(self.coef, t)
+        if exact and self.knots is not None:
+            inside = np.abs(t) < 1.0
+            star = np.zeros(t.shape)
+            star[inside] = sie.bounded_linear(self.knots[0], self.knots[1], t[inside])
+            q = q + star
+        else:
+            q = q + sie.bounded_inside(self.coef, t)
         if self.fixup:
             q = q + self.fixup * 2.0 / (math.pi * self.radius) * np.sqrt(np.maximum(1.0 - t * t, 0.0))
         return np.where((x > self.left) & (x < self.right), q, 0.0)
@@ -363,7 +381,16 @@ class StepProblem:
         if abs(fixup) <= 1e-13 * self.f * self.P:
             fixup = 0.0
         ramp = float(self.normal.pressure(b1)) if cfg.opposite else 0.0
-        return Shear(self.L, self.R, b1, b2, cfg, coef, ramp, fixup)
+        knots = None
+        if not cfg.opposite:
+            inner = self._Xa[(self._Xa > b1) & (self._Xa < b2)]
+            xk = np.concatenate(([b1], inner, [b2]))
+            r = 0.5 * (b2 - b1)
+            knots = (_frozen((xk - 0.5 * (b1 + b2)) / r), _frozen(self.strain_data(sol, xk)))
+            knots[0].flags.writeable = True
+            knots[0][0], knots[0][-1] = -1.0, 1.0
+            knots[0].flags.writeable = False
+        return Shear(self.L, self.R, b1, b2, cfg, _frozen(coef), ramp, fixup, knots)
 
     def strain_data(self, sol: Solution, x: np.ndarray) -> np.ndarray:
         """G without the ramp term: [E(x) + F e(x) - A sigma/4 - f s (h' + alpha)] / A."""
@@ -371,8 +398,14 @@ class StepProblem:
         E = np.interp(x, self.X, self.E) + sol.gauge * np.interp(x, self.X, self.gauge)
         return (E - 0.25 * self.A * self.sigma - s * self.f * (self.slope(x) + self.normal.rotation)) / self.A
 
-    def strain(self, shear: Shear, x: np.ndarray) -> np.ndarray:
-        """Relative strain Delta-eps (T1) of the state at points ``x`` outside the stick interval."""
+    def strain(self, shear: Shear, x: np.ndarray, near: np.ndarray | None = None) -> np.ndarray:
+        """Relative strain Delta-eps (T1) of the state at points ``x`` outside the stick interval.
+
+        Points flagged in ``near`` (shape of x) use the closed-form outside
+        Hilbert transform of the piecewise-linear stick data
+        (``sie.hilbert_linear_outside``) instead of the Chebyshev series, which
+        converges slowly right next to the stick edges.
+        """
         cfg = shear.config
         t = (x - shear.center) / shear.radius
         out = cfg.base * self.f * (self.slope(x) + self.normal.rotation)
@@ -380,9 +413,16 @@ class StepProblem:
             extra = cfg.left - cfg.base
             out = out + self.A * self.f * extra * ramp_hilbert(self.normal, shear.stick_left, shear.stick_right, x)
         hil = sie.hilbert_outside(shear.coef, t)
+        if near is not None and shear.knots is not None and np.any(near):
+            hil[near] = sie.hilbert_linear_outside(shear.knots[0], shear.knots[1], t[near])
         if shear.fixup:
-            hil = hil + shear.fixup * 2.0 / (math.pi * shear.radius) * sie._rho(t)
+            hil = hil + shear.fixup * 2.0 / (math.pi * shear.radius) * sie.rho(t)
         return out + self.A * hil + 0.25 * self.A * self.sigma
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    a.flags.writeable = False
+    return a
 
 
 def ramp_hilbert(normal: NormalSolution, b1: float, b2: float, x: np.ndarray) -> np.ndarray:

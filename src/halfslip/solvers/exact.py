@@ -372,6 +372,24 @@ class ExactMemory:
         report = StepReport(regime, regime in (Regime.PARTIAL_SLIP, Regime.GROSS_SLIDING), P_changed, message)
         return new_state, report
 
+    def same_state(self, a: ContactState, b: ContactState) -> bool:
+        """Whether two states have the same memory, to rounding (1e-12 of f P_max).
+
+        Used to detect a steady cycle: the knots of W and the slip references
+        must agree; the dissipation and the time may differ.
+        """
+        ma, mb = a.memory, b.memory
+        if len(ma.P) != len(mb.P):
+            return False
+        scale = max(ma.P[-1], mb.P[-1], 1e-300)
+        if not (np.allclose(ma.P, mb.P, rtol=0, atol=1e-12 * scale)
+                and np.allclose(ma.W, mb.W, rtol=0, atol=1e-12 * self.f * scale)):
+            return False
+        if ma.phi_ref is None:
+            return True
+        slip_scale = self.A * self.f * scale
+        return bool(np.allclose(ma.phi_ref, mb.phi_ref, rtol=0, atol=1e-12 * slip_scale, equal_nan=True))
+
     # -- reconstruction ---------------------------------------------------
     def shift(self, mem: LevelMemory) -> float:
         """Rigid shift delta, datum of the log kernel at distance l = profile length scale."""

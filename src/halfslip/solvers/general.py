@@ -54,6 +54,15 @@ COULOMB_TOL = 1e-6
 DIRECTION_TOL = 1e-6
 #: U-series terms for the log potential of q (the rigid shift).
 FIT_TERMS = 256
+#: Material points of the cluster laid on the slip side of each stick edge, at b +- h (k/K)^2.
+CLUSTER_POINTS = 16
+#: Virtual points for the square-root cell next to a stick edge.
+VIRTUAL_POINTS = 8
+#: Lattice spacings from a stick edge within which slip-zone strains use the closed form.
+NEAR_SPACINGS = 4.0
+
+# kinds of material point
+LATTICE, EDGE, BREAK, CLUSTER, SINGULAR_LEFT, SINGULAR_RIGHT = range(6)
 
 
 @dataclass(frozen=True)
@@ -67,11 +76,16 @@ class GeneralMemory:
     origin, spacing : float
         The material lattice x_j = origin + j spacing (NaN before first contact).
     X : ndarray, shape (n,)
-        Data points: left contact edge, lattice points strictly inside, right edge.
+        Material points in contact, increasing: the two contact edges (first and
+        last), lattice points, breakpoints of h', and clusters at stick edges.
     E : ndarray, shape (n,)
         Locked-in relative strain Delta-eps at X.
     G : ndarray, shape (n,)
         Slip accumulated at X since the point entered contact [m].
+    kind : ndarray of int8, shape (n,)
+        LATTICE, EDGE, BREAK, CLUSTER, or SINGULAR_LEFT/RIGHT: a stick edge at
+        which a slip zone on that side ended; E rises like sqrt(distance) into
+        the old slip zone, and the cell on that side is interpolated so.
     shear : Shear or None
         Representation of q(x).
     edge_ratio : tuple of float
@@ -89,6 +103,7 @@ class GeneralMemory:
     X: np.ndarray
     E: np.ndarray
     G: np.ndarray
+    kind: np.ndarray
     shear: Shear | None
     edge_ratio: tuple
     q_fit: np.ndarray | None
@@ -127,7 +142,8 @@ class GeneralSolver:
     nodes : int
         Resolution: the material lattice keeps between ``nodes`` and
         2 ``nodes`` points across the contact, and q on the stick zone is a
-        ``nodes``-term Chebyshev series.
+        ``nodes``-term Chebyshev series (used inside the solver; output q is
+        the exact inversion of the interpolated strain).
     stations : array_like, shape (n_stations,), optional
         Surface points whose accumulated slip :meth:`slip` returns.
 
@@ -163,8 +179,9 @@ class GeneralSolver:
     def initial_state(self, t0: float = 0.0) -> ContactState:
         """Separated, unloaded, no memory."""
         nan = math.nan
-        mem = GeneralMemory(None, nan, nan, _frozen(np.zeros(0)), _frozen(np.zeros(0)), _frozen(np.zeros(0)),
-                            None, (0.0, 0.0), None)
+        empty = _frozen(np.zeros(0))
+        mem = GeneralMemory(None, nan, nan, empty, empty, empty, _frozen(np.zeros(0, np.int8)), None, (0.0, 0.0),
+                            None)
         return ContactState(float(t0), Loads(0.0, 0.0, 0.0, 0.0), nan, nan, nan, nan, 0.0, 0.0, mem)
 
     # ------------------------------------------------------------------
@@ -176,7 +193,8 @@ class GeneralSolver:
         self.counters["steps"] += 1
         if loads1 == loads0:
             regime = Regime.SEPARATED if mem.normal is None else Regime.STICK
-            new = _replace(state, t=float(t1), stick=(state.contact_left, state.contact_right))
+            new = ContactState(float(t1), loads0, state.contact_left, state.contact_right, state.contact_left,
+                               state.contact_right, state.shift, state.dissipation, mem)
             return new, StepReport(regime, False, False, "")
         if not loads1.P > 0.0:
             return self._separate(state, t1, loads1)
@@ -192,28 +210,28 @@ class GeneralSolver:
         f = self.f
         edges1 = _Edges.of(N1, loads0, loads1)
         sticks = edges1.sticks(f) and (mem.normal is None or _Edges.of(mem.normal, loads0, loads1).sticks(f))
-        problem = StepProblem(N1, self._slope, self._breaks, data.X, data.E, data.gauge, self.A, f,
-                              loads1.sigma, loads1.Q, self.nodes)
+        Xa, Ea, ga = _augment(data.X, data.kind, data.E, data.gauge)
+        problem = StepProblem(N1, self._slope, self._breaks, Xa, Ea, ga, self.A, f, loads1.sigma, loads1.Q,
+                              self.nodes)
         chosen = None
         if sticks:
             sol = problem.solve(Config(0, 0))
             shear = problem.shear(sol)
-            check = self._check(problem, data, sol, shear)
-            if check.coulomb <= COULOMB_TOL:
-                chosen = (sol, shear, check)
+            if self._coulomb(problem, shear) <= COULOMB_TOL:
+                chosen = (sol, shear)
         slipped = chosen is None
         message = ""
         if slipped:
             self.counters["slip_solves"] += 1
             chosen, message = self._slip_solve(problem, data, mem, N1, edges1)
-        sol, shear, check = chosen
+        sol, shear = chosen
         self.counters["evaluations"] += problem.evaluations
-        return self._finish(state, t1, loads1, N1, data, problem, sol, shear, check, slipped, normal_changed,
-                            message, edges1)
+        return self._finish(state, t1, loads1, N1, data, problem, sol, shear, slipped, normal_changed, message,
+                            edges1)
 
-    # -- the data points of the new contact -------------------------------
+    # -- the material points of the new contact ----------------------------
     def _data(self, mem: GeneralMemory, N1: NormalSolution, loads0: Loads, loads1: Loads) -> "_Data":
-        """Lattice and edge points of the new contact with their start strain, gauge and slip."""
+        """Points of the new contact with their start strain, gauge and slip (arrivals included)."""
         L1, R1 = N1.left, N1.right
         W = R1 - L1
         origin, h = mem.origin, mem.spacing
@@ -225,9 +243,13 @@ class GeneralSolver:
             h *= 0.5
         j_lo = math.floor((L1 - origin) / h) + 1
         j_hi = math.ceil((R1 - origin) / h) - 1
-        inner = origin + h * np.arange(j_lo, j_hi + 1)
-        inner = inner[(inner - L1 > 1e-9 * h) & (R1 - inner > 1e-9 * h)]
-        X = np.concatenate(([L1], inner, [R1]))
+        lattice = origin + h * np.arange(j_lo, j_hi + 1)
+        breaks = self._breaks[(self._breaks > L1) & (self._breaks < R1)]
+        carried = (mem.kind >= CLUSTER) & (mem.X > L1) & (mem.X < R1)
+        X = np.concatenate(([L1, R1], lattice, breaks, mem.X[carried]))
+        kind = np.concatenate(([EDGE, EDGE], np.full(lattice.size, LATTICE), np.full(breaks.size, BREAK),
+                               mem.kind[carried])).astype(np.int8)
+        X, kind = _merge(X, kind, 1e-9 * h)
         n = X.size
         E = np.zeros(n)
         gauge = np.zeros(n)
@@ -235,27 +257,29 @@ class GeneralSolver:
         p0 = np.zeros(n)
         N0 = mem.normal
         if N0 is not None:
-            old = (X > N0.left) & (X < N0.right)
-            E[old] = np.interp(X[old], mem.X, mem.E)
-            G[old] = np.interp(X[old], mem.X, mem.G)
-            p0 = N0.pressure(X)
+            old = (X >= N0.left) & (X <= N0.right)
             if np.array_equal(X, mem.X):
                 E, G = mem.E.copy(), mem.G.copy()
+            else:
+                Xa0, Ea0 = _augment(mem.X, mem.kind, mem.E)
+                E[old] = np.interp(X[old], Xa0, Ea0)
+                G[old] = np.interp(X[old], mem.X, mem.G)
+            p0 = N0.pressure(X)
         else:
             old = np.zeros(n, dtype=bool)
         arriving = ~old
-        solves = 0
         first = math.nan
         if np.any(arriving):
             path = EdgePath(self.problem, N0, N1, loads0, loads1)
-            solves = path.solves
+            self.counters["normal_solves"] += path.solves
             if N0 is not None:
-                E[arriving] = outside_strain(mem.X, mem.E, X[arriving], 2 * self.nodes)
-                split = 0.5 * (N0.left + N0.right)
+                Xa0, Ea0 = _augment(mem.X, mem.kind, mem.E)
+                E[arriving] = outside_strain(Xa0, Ea0, X[arriving], 2 * self.nodes)
+                split = N0.center
             else:
                 lam = path.lam_lo
                 E[arriving] = 0.25 * self.A * (loads0.sigma + lam * (loads1.sigma - loads0.sigma))
-                left, right = path.edges(np.array(path.lam_lo))
+                left, right = path.edges(np.array(lam))
                 split = first = 0.5 * (float(left) + float(right))
             for side in (-1, 1):
                 mask = arriving & ((X < split) if side < 0 else (X >= split))
@@ -263,13 +287,12 @@ class GeneralSolver:
                     inc, e = arrival_strains(path, X[mask], side, self.A)
                     E[mask] += inc
                     gauge[mask] = e
-        self.counters["normal_solves"] += solves
-        return _Data(origin, h, X, E, gauge, G, p0, old, first)
+        return _Data(origin, h, X, kind, E, gauge, G, p0, first)
 
     # -- slip -------------------------------------------------------------
     def _slip_solve(self, problem: StepProblem, data: "_Data", mem: GeneralMemory, N1: NormalSolution,
-                    edges1: "_Edges"):
-        """Try slip configurations, most likely first; return (sol, shear, check) and a message."""
+                    edges1: _Edges):
+        """Try slip configurations, most likely first; return ((sol, shear), message)."""
         f = self.f
         N0 = mem.normal
         options = []
@@ -288,9 +311,9 @@ class GeneralSolver:
             key=lambda item: item[0],
         )
         guess = None
-        if mem.shear is not None and mem.shear.config != Config(0, 0):
+        if mem.shear is not None and mem.shear.config != Config(0, 0) and mem.shear.radius > 0.0:
             guess = (max(mem.shear.stick_left, N1.left), min(mem.shear.stick_right, N1.right))
-        best = None
+        best, best_violation = None, math.inf
         for _, cfg in ranked:
             if cfg == Config(0, 0):
                 continue
@@ -299,63 +322,87 @@ class GeneralSolver:
             if not sol.converged:
                 continue
             shear = problem.shear(sol)
-            check = self._check(problem, data, sol, shear)
-            if check.ok:
-                return (sol, shear, check), ""
-            if best is None or check.violation < best[2].violation:
-                best = (sol, shear, check)
+            violation = self._violation(problem, data, sol, shear)
+            if violation <= 1.0:
+                return (sol, shear), ""
+            if violation < best_violation:
+                best, best_violation = (sol, shear), violation
         if best is None:
             sol = problem.solve(Config(0, 0))
-            shear = problem.shear(sol)
-            best = (sol, shear, self._check(problem, data, sol, shear))
-            return best, "slip solve did not converge for any slip-zone configuration; full stick kept"
+            return (sol, problem.shear(sol)), "slip solve did not converge for any slip-zone configuration; " \
+                                              "full stick kept"
         return best, (
-            f"slip solve: no slip-zone configuration met the Coulomb and slip-direction checks; "
-            f"kept the closest (violation {best[2].violation:.2g})"
+            "slip solve: no slip-zone configuration met the Coulomb and slip-direction checks; "
+            f"kept the closest (violation {best_violation:.2g} x tolerance)"
         )
 
-    def _check(self, problem: StepProblem, data: "_Data", sol: Solution, shear: Shear) -> "_Check":
-        """Coulomb excess on the stick zone, reversed slip in the slip zones, and E, slip there."""
-        n = self.nodes
-        t = sie.chebyshev_nodes(n)
+    def _coulomb(self, problem: StepProblem, shear: Shear) -> float:
+        """Largest excess of abs(q) over f p on the stick interval, relative to f max p."""
+        t = sie.chebyshev_nodes(self.nodes)
         x = shear.center + shear.radius * t
         p = problem.normal.pressure(x)
         q = shear.evaluate(x, p, self.f)
-        coulomb = float(np.max(np.abs(q) - self.f * p)) / problem.p_scale
+        return float(np.max(np.abs(q) - self.f * p)) / problem.p_scale
+
+    def _violation(self, problem, data, sol, shear) -> float:
+        """Coulomb excess and reversed slip, each relative to its tolerance (<= 1 passes)."""
+        coulomb = self._coulomb(problem, shear)
         E_start = data.E + sol.gauge * data.gauge
-        E_end = E_start.copy()
-        dg = np.zeros_like(data.X)
-        b1, b2 = sol.stick_left, sol.stick_right
+        _, dg = self._slip_update(problem, shear, data.X, data.kind, E_start, data.spacing)
         reverse = 0.0
-        X = data.X
-        for side, sign, zone in ((-1, sol.config.left, X < b1), (1, sol.config.right, X > b2)):
-            if sign == 0 or not np.any(zone):
-                continue
-            E_end[zone] = problem.strain(shear, X[zone])
-            b = b1 if side < 0 else b2
-            xs = np.concatenate(([b], X[zone][::-1] if side < 0 else X[zone]))
-            diff = np.concatenate(([0.0], (E_end - E_start)[zone][::-1] if side < 0 else (E_end - E_start)[zone]))
-            cum = np.concatenate(([0.0], np.cumsum(0.5 * (diff[1:] + diff[:-1]) * np.diff(xs))))[1:]
-            dg[zone] = cum[::-1] if side < 0 else cum
-            reverse = max(reverse, float(np.max(-sign * dg[zone])))
+        for sign, zone in ((sol.config.left, data.X < sol.stick_left), (sol.config.right, data.X > sol.stick_right)):
+            if sign != 0 and np.any(zone):
+                reverse = max(reverse, float(np.max(-sign * dg[zone])))
         scale = float(np.max(np.abs(dg)))
         direction = reverse / scale if scale > 0.0 else 0.0
-        return _Check(coulomb, direction, E_end, dg)
+        return max(coulomb / COULOMB_TOL, direction / DIRECTION_TOL)
+
+    def _slip_update(self, problem, shear, X, kind, E_start, h):
+        """Strain at the end of the step and slip increment at points X (shape (n,) each).
+
+        Stuck points keep E_start; points in a slip zone take the current
+        Delta-eps, and their slip increment is the integral of the strain change
+        from the stick edge outward (trapezoid over X; the stick edge itself
+        does not slip).
+        """
+        E_end = E_start.copy()
+        dg = np.zeros_like(X)
+        cfg = shear.config
+        b1, b2 = shear.stick_left, shear.stick_right
+        Xa, Ea = _augment(X, kind, E_start)
+        for side, sign, zone in ((-1, cfg.left, X < b1), (1, cfg.right, X > b2)):
+            if sign == 0 or not np.any(zone):
+                continue
+            b = b1 if side < 0 else b2
+            near = np.abs(X[zone] - b) <= NEAR_SPACINGS * h
+            E_end[zone] = problem.strain(shear, X[zone], near)
+            order = np.flatnonzero(zone)[::-side]  # outward from b
+            xs = np.concatenate(([b], X[order]))
+            diff = np.concatenate(([0.0], E_end[order] - E_start[order]))
+            dg[order] = np.cumsum(0.5 * (diff[1:] + diff[:-1]) * np.diff(xs))
+        return E_end, dg
 
     # -- finishing a step ---------------------------------------------------
-    def _finish(self, state, t1, loads1, N1, data, problem, sol, shear, check, slipped, normal_changed,
-                message, edges1):
+    def _finish(self, state, t1, loads1, N1, data, problem, sol, shear, slipped, normal_changed, message, edges1):
         mem = state.memory
         f = self.f
         cfg = sol.config
-        W = N1.right - N1.left
-        zones = (sol.stick_left - N1.left > 1e-9 * W) or (N1.right - sol.stick_right > 1e-9 * W)
-        regime = Regime.PARTIAL_SLIP if (cfg != Config(0, 0) and zones) else Regime.STICK
+        L1, R1 = N1.left, N1.right
+        W = R1 - L1
+        b1, b2 = sol.stick_left, sol.stick_right
+        left_zone = cfg.left != 0 and b1 - L1 > 1e-9 * W
+        right_zone = cfg.right != 0 and R1 - b2 > 1e-9 * W
+        regime = Regime.PARTIAL_SLIP if (left_zone or right_zone) else Regime.STICK
         if regime == Regime.STICK:
             self.counters["stick_steps"] += 1
-        p1 = N1.pressure(data.X)
-        dissipation = _dissipation(data.X, check.slip, data.p0, p1, f)
-        G = data.G + check.slip
+        E_start = data.E + sol.gauge * data.gauge
+        X, kind, E_start, G0, p0 = data.X, data.kind, E_start, data.G, data.p0
+        if regime == Regime.PARTIAL_SLIP:
+            X, kind, E_start, G0, p0 = self._clusters(data, E_start, b1 if left_zone else None,
+                                                      b2 if right_zone else None, N1)
+        E_end, dg = self._slip_update(problem, shear, X, kind, E_start, data.spacing)
+        p1 = N1.pressure(X)
+        dissipation = _dissipation(X, dg, p0, p1, f)
         ratio = list(mem.edge_ratio)
         for i, s in enumerate((cfg.left, cfg.right)):
             if s != 0:
@@ -363,18 +410,54 @@ class GeneralSolver:
             elif edges1.v[i] > 0.0:
                 ratio[i] = edges1.u[i] / edges1.v[i]
         q_fit = self._fit(N1, shear)
-        stuck = _stuck_point(mem.normal, sol.stick_left, sol.stick_right, data.first)
+        stuck = _stuck_point(mem.normal, b1, b2, data.first)
         shift = self._shift(state, mem, N1, q_fit, stuck, loads1)
-        residual = 0.0 if cfg != Config(0, 0) else abs(problem.gammas(cfg, N1.left, N1.right, sol.gauge)[0]) / problem.p_scale
-        new_mem = GeneralMemory(N1, data.origin, data.spacing, _frozen(data.X.copy()), _frozen(check.strain),
-                                _frozen(G), shear, tuple(ratio), q_fit, residual)
-        if regime == Regime.STICK:
-            stick = (N1.left, N1.right)
-        else:
-            stick = (sol.stick_left, sol.stick_right)
-        new = ContactState(float(t1), loads1, N1.left, N1.right, stick[0], stick[1], shift,
-                           state.dissipation + dissipation, new_mem)
+        residual = 0.0
+        if cfg == Config(0, 0):
+            residual = abs(problem.gammas(cfg, L1, R1, sol.gauge)[0]) / problem.p_scale
+        new_mem = GeneralMemory(N1, data.origin, data.spacing, _frozen(X), _frozen(E_end), _frozen(G0 + dg),
+                                _frozen(kind), shear, tuple(ratio), q_fit, residual)
+        stick = (L1, R1) if regime == Regime.STICK else (b1, b2)
+        new = ContactState(float(t1), loads1, L1, R1, stick[0], stick[1], shift, state.dissipation + dissipation,
+                           new_mem)
         return new, StepReport(regime, slipped, normal_changed, message)
+
+    def _clusters(self, data, E_start, b_left, b_right, N1):
+        """Drop cluster points inside the slip zones and lay new ones at the stick edges.
+
+        A stick edge b becomes a SINGULAR point (E there is the stuck value) with
+        CLUSTER_POINTS points at b -+ h (k/K)^2 on its slip side, so that the
+        square-root rise of E into the slip zone survives when the zone stops.
+        """
+        X, kind = data.X, data.kind
+        drop = np.zeros(X.size, dtype=bool)
+        if b_left is not None:
+            drop |= (X < b_left) & (kind >= CLUSTER)
+        if b_right is not None:
+            drop |= (X > b_right) & (kind >= CLUSTER)
+        h = data.spacing
+        offsets = h * (np.arange(1, CLUSTER_POINTS + 1) / CLUSTER_POINTS) ** 2
+        new_x, new_kind = [], []
+        for b, side, sing in ((b_left, -1, SINGULAR_LEFT), (b_right, 1, SINGULAR_RIGHT)):
+            if b is None:
+                continue
+            pts = b + side * offsets
+            pts = pts[(pts > N1.left) & (pts < N1.right)]
+            new_x += [np.array([b]), pts]
+            new_kind += [np.array([sing]), np.full(pts.size, CLUSTER)]
+        keep = ~drop
+        Xa, Ea = _augment(X, kind, E_start)
+        add_x = np.concatenate(new_x)
+        add_kind = np.concatenate(new_kind).astype(np.int8)
+        X2 = np.concatenate((X[keep], add_x))
+        kind2 = np.concatenate((kind[keep], add_kind))
+        E2 = np.concatenate((E_start[keep], np.interp(add_x, Xa, Ea)))
+        G2 = np.concatenate((data.G[keep], np.interp(add_x, X, data.G)))
+        p2 = np.concatenate((data.p0[keep], np.interp(add_x, X, data.p0)))
+        order = np.argsort(X2, kind="stable")
+        X2, kind2, E2, G2, p2 = X2[order], kind2[order], E2[order], G2[order], p2[order]
+        X2, kind2, (E2, G2, p2) = _merge(X2, kind2, 1e-9 * h, E2, G2, p2)
+        return X2, kind2, E2, G2, p2
 
     def _gross(self, state, t1, loads1, N1, data, normal_changed):
         """q = sign(Q) f p everywhere; g frozen at the middle of the old/new contact overlap."""
@@ -383,31 +466,27 @@ class GeneralSolver:
         s = 1 if loads1.Q > 0 else -1
         L1, R1 = N1.left, N1.right
         c = 0.5 * (L1 + R1)
-        coef = np.zeros(self.nodes)
-        shear = Shear(L1, R1, c, c, Config(s, s), coef, 0.0, 0.0)
-        E_end = s * f * (self._slope(data.X) + N1.rotation) + 0.25 * self.A * loads1.sigma
+        shear = Shear(L1, R1, c, c, Config(s, s), _frozen(np.zeros(self.nodes)), 0.0, 0.0)
+        X = data.X
+        E_end = s * f * (self._slope(X) + N1.rotation) + 0.25 * self.A * loads1.sigma
         stuck = _stuck_point(mem.normal, L1, R1, data.first)
         diff = E_end - data.E
-        order = np.argsort(np.abs(data.X - stuck))
-        dg = np.zeros_like(data.X)
-        # integrate outward from the reference point on each side
+        d0 = float(np.interp(stuck, X, diff))
+        dg = np.zeros_like(X)
         for side in (-1, 1):
-            zone = (data.X < stuck) if side < 0 else (data.X >= stuck)
-            idx = np.flatnonzero(zone)
-            if idx.size == 0:
-                continue
-            idx = idx[::-1] if side < 0 else idx
-            xs = np.concatenate(([stuck], data.X[idx]))
-            d0 = float(np.interp(stuck, data.X, diff))
-            ds = np.concatenate(([d0], diff[idx]))
-            dg[idx] = np.cumsum(0.5 * (ds[1:] + ds[:-1]) * np.diff(xs))
-        del order
-        p1 = N1.pressure(data.X)
-        dissipation = _dissipation(data.X, dg, data.p0, p1, f)
+            idx = np.flatnonzero((X < stuck) if side < 0 else (X >= stuck))[::side]
+            if idx.size:
+                xs = np.concatenate(([stuck], X[idx]))
+                ds = np.concatenate(([d0], diff[idx]))
+                dg[idx] = np.cumsum(0.5 * (ds[1:] + ds[:-1]) * np.diff(xs))
+        keep = data.kind < CLUSTER
+        p1 = N1.pressure(X)
+        dissipation = _dissipation(X, dg, data.p0, p1, f)
         q_fit = self._fit(N1, shear)
         shift = self._shift(state, mem, N1, q_fit, stuck, loads1)
-        new_mem = GeneralMemory(N1, data.origin, data.spacing, _frozen(data.X.copy()), _frozen(E_end),
-                                _frozen(data.G + dg), shear, (s * f, s * f), q_fit, 0.0)
+        new_mem = GeneralMemory(N1, data.origin, data.spacing, _frozen(X[keep]), _frozen(E_end[keep]),
+                                _frozen((data.G + dg)[keep]), _frozen(data.kind[keep]), shear, (s * f, s * f),
+                                q_fit, 0.0)
         message = ""
         if abs(loads1.Q) > f * loads1.P * (1.0 + 1e-12):
             message = "abs(Q) > f P: gross sliding, shear force carried limited to f P"
@@ -422,7 +501,8 @@ class GeneralSolver:
             shift += self._potential(mem.normal, mem.q_fit, mem.normal.center)
         nan = math.nan
         empty = _frozen(np.zeros(0))
-        new_mem = GeneralMemory(None, mem.origin, mem.spacing, empty, empty, empty, None, (0.0, 0.0), None)
+        new_mem = GeneralMemory(None, mem.origin, mem.spacing, empty, empty, empty, _frozen(np.zeros(0, np.int8)),
+                                None, (0.0, 0.0), None)
         message = f"separated (P <= 0): shear force Q = {loads1.Q:g} N/m not carried" if loads1.Q != 0.0 else ""
         new = ContactState(float(t1), loads1, nan, nan, nan, nan, shift, state.dissipation, new_mem)
         return new, StepReport(Regime.SEPARATED, False, mem.normal is not None, message)
@@ -455,7 +535,7 @@ class GeneralSolver:
         if memory.normal is None:
             return np.zeros(x.shape), np.zeros(x.shape)
         p = memory.normal.pressure(x)
-        return p, memory.shear.evaluate(x, p, self.f)
+        return p, memory.shear.evaluate(x, p, self.f, exact=True)
 
     def slip(self, memory: GeneralMemory) -> np.ndarray:
         """Slip accumulated at the stations since each entered contact [m]; NaN outside contact."""
@@ -471,33 +551,74 @@ class GeneralSolver:
 
 @dataclass(frozen=True)
 class _Data:
-    """Data points of the new contact and what they carry into the step."""
+    """Material points of the new contact and what they carry into the step (shapes (n,))."""
 
     origin: float
     spacing: float
-    X: np.ndarray  # (n,) points
-    E: np.ndarray  # (n,) strain at the start (arrivals: on arrival, gauge force 0)
-    gauge: np.ndarray  # (n,) d E / d F
-    G: np.ndarray  # (n,) slip so far
-    p0: np.ndarray  # (n,) pressure at the start
-    old: np.ndarray  # (n,) in contact at the start
+    X: np.ndarray
+    kind: np.ndarray
+    E: np.ndarray  # strain at the start (arrivals: on arrival, gauge force 0)
+    gauge: np.ndarray  # d E / d F
+    G: np.ndarray  # slip so far
+    p0: np.ndarray  # pressure at the start
     first: float  # where contact formed (NaN unless the step starts separated)
 
 
-@dataclass(frozen=True)
-class _Check:
-    coulomb: float
-    direction: float
-    strain: np.ndarray  # (n,) E at the end of the step
-    slip: np.ndarray  # (n,) slip increment of the step
+def _augment(X: np.ndarray, kind: np.ndarray, E: np.ndarray, *others: np.ndarray):
+    """Insert virtual points in the cell on the slip side of each SINGULAR point.
 
-    @property
-    def violation(self) -> float:
-        return max(self.coulomb / COULOMB_TOL, self.direction / DIRECTION_TOL)
+    In that cell E = E(b) + (E(x1) - E(b)) sqrt((x - b) / (x1 - b)); the
+    virtual points b + (x1 - b)(j/V)^2 carry it to the piecewise-linear
+    machinery. ``others`` are interpolated linearly.
 
-    @property
-    def ok(self) -> bool:
-        return self.violation <= 1.0
+    Returns
+    -------
+    Xa, Ea, *others_a : ndarray, shape (m,) each
+    """
+    sing = np.flatnonzero(kind >= SINGULAR_LEFT)
+    if sing.size == 0:
+        return (X, E, *others)
+    frac = np.arange(1, VIRTUAL_POINTS) / VIRTUAL_POINTS
+    xs, es = [X], [E]
+    for i in sing:
+        j = i - 1 if kind[i] == SINGULAR_LEFT else i + 1
+        if j < 0 or j >= X.size:
+            continue
+        xs.append(X[i] + (X[j] - X[i]) * frac**2)
+        es.append(E[i] + (E[j] - E[i]) * frac)
+    Xa = np.concatenate(xs)
+    Ea = np.concatenate(es)
+    order = np.argsort(Xa, kind="stable")
+    Xa, Ea = Xa[order], Ea[order]
+    return (Xa, Ea, *(np.interp(Xa, X, o) for o in others))
+
+
+def _merge(X, kind, tol, *values):
+    """Sort points and drop near-duplicates, keeping edges and then the highest kind."""
+    priority = np.where(kind == EDGE, 10, kind)
+    order = np.lexsort((-priority, X))
+    X, kind = X[order], kind[order]
+    values = [v[order] for v in values]
+    keep = np.ones(X.size, dtype=bool)
+    last = 0
+    for i in range(1, X.size):
+        if X[i] - X[last] <= tol:
+            # keep the higher priority of the two
+            if priority[order][i] > priority[order][last]:
+                keep[last] = False
+                last = i
+            else:
+                keep[i] = False
+        else:
+            last = i
+    # no point may sit beyond or on an edge except the edges themselves
+    edges = kind == EDGE
+    lo, hi = X[edges].min(), X[edges].max()
+    keep &= edges | ((X > lo + tol) & (X < hi - tol))
+    out = (X[keep], kind[keep])
+    if values:
+        return (*out, tuple(v[keep] for v in values))
+    return out
 
 
 def _dissipation(X, dg, p0, p1, f) -> float:
@@ -522,11 +643,6 @@ def _slope_breaks(profile) -> np.ndarray:
     if isinstance(profile, TabulatedProfile):
         return np.asarray(profile.x, dtype=float)
     return np.zeros(0)
-
-
-def _replace(state: ContactState, t: float, stick) -> ContactState:
-    return ContactState(t, state.loads, state.contact_left, state.contact_right, stick[0], stick[1], state.shift,
-                        state.dissipation, state.memory)
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:
