@@ -32,19 +32,22 @@ def test_run_hertz_example_writes_every_interface_variable(tmp_path):
         assert ds.attrs["halfslip_version"] == hs.__version__
         assert "hertz-pad" in ds.attrs["scene"]
         assert ds["regime"].attrs["flag_meanings"].split() == ["separated", "stick", "partial_slip", "gross_sliding"]
-        assert ds.sizes["t"] == 1 + 20 + 20 * 100
+        # the cycle repeats after the second one: 18 of 20 cycles are skipped
+        assert ds.attrs["skipped_cycles"] == 18
+        assert ds.sizes["t"] == 1 + 20 + 2 * 100
         # constant P after the ramp: the normal problem is solved on the ramp steps only
         assert ds.attrs["count_normal_solves"] == 20
         assert ds.attrs["count_stick_steps"] == 20
     with h5py.File(out, "r") as f:
-        assert f["q"].shape == (2021, 201)
+        assert f["q"].shape == (221, 201)
 
 
 def test_output_every_and_fields_control_storage(tmp_path):
     scene = hs.load_scene(EXAMPLES / "hertz_pad.yaml")
     import dataclasses
 
-    scene = dataclasses.replace(scene, output=dataclasses.replace(scene.output, fields=("q",), every=7))
+    scene = dataclasses.replace(scene, output=dataclasses.replace(scene.output, fields=("q",), every=7),
+                                solver=dataclasses.replace(scene.solver, skip_steady_cycles=False))
     ds = hs.simulate(scene)
     n = scene.history.n_steps
     assert ds.sizes["t"] == 1 + n // 7 + (n % 7 != 0)

@@ -143,42 +143,65 @@ class _Progress:
 @click.option("-o", "--output", "output", metavar="OUT.h5", help="Result file (default: the scene name with .h5, here).")
 @click.option("--method", type=click.Choice(["auto", "exact", "general"]), help="Override solver.method.")
 @click.option("--nodes", type=click.IntRange(min=8), help="Override solver.nodes (general solver).")
+@click.option("--resume", is_flag=True, help="Continue the unfinished run in OUT.h5.")
+@click.option("--checkpoint-every", type=click.FloatRange(min=0.0), default=2.0, show_default=True,
+              help="Seconds between rewrites of OUT.h5 during the run (at least).")
 @click.option("--quiet", is_flag=True, help="Print nothing but errors.")
-def run(scene_file: str, output: str | None, method: str | None, nodes: int | None, quiet: bool) -> None:
+def run(scene_file: str, output: str | None, method: str | None, nodes: int | None, resume: bool,
+        checkpoint_every: float, quiet: bool) -> None:
     """March a scene's load history and write the result dataset (HDF5).
 
+    The file is rewritten atomically every few seconds with every completed
+    step and a checkpoint, so a killed run loses at most the last interval.
     Ctrl-C or SIGTERM stops the run and writes every completed step, marked
-    incomplete (attribute ``complete = 0``); the exit status is then 130.
+    incomplete (attribute ``complete = 0``); the exit status is then 130, and
+    ``--resume`` continues it to the same result as an uninterrupted run.
     """
     import signal
     import sys
     from pathlib import Path
 
-    from .io import write_result
+    from .io import RunFileWriter, read_checkpoint, read_result
     from .simulator import MethodError, simulate
 
     scene = load_scene(scene_file)
     out = Path(output) if output else Path(f"{Path(scene_file).stem}.h5")
-    if out.parent and not out.parent.exists():
+    if not out.parent.exists():
         raise HalfslipInputError(f"folder {str(out.parent)!r} does not exist", field="-o")
+    previous_run = None
+    if resume:
+        if not out.exists():
+            raise HalfslipInputError(f"{out} does not exist: nothing to resume", field="--resume")
+        try:
+            previous_run = (read_result(out), read_checkpoint(out))
+        except (OSError, ValueError, KeyError) as error:
+            raise HalfslipInputError(f"{out} is not a halfslip run file ({error})", field="--resume") from None
 
-    def _terminate(signum, frame):  # SIGTERM behaves like Ctrl-C: stop and keep what is done
-        raise KeyboardInterrupt
+    stop = []
 
-    previous = signal.signal(signal.SIGTERM, _terminate)
+    def _request_stop(signum, frame):
+        # first SIGINT / SIGTERM: finish the current step, write, exit; a second one: stop at once
+        if stop:
+            raise KeyboardInterrupt
+        stop.append(signum)
+
+    handlers = {sig: signal.signal(sig, _request_stop) for sig in (signal.SIGINT, signal.SIGTERM)}
     progress = _Progress(enabled=not quiet and sys.stderr.isatty())
     try:
-        result = simulate(scene, method=method, nodes=nodes, progress=progress)
+        result = simulate(scene, method=method, nodes=nodes, progress=progress,
+                          writer=RunFileWriter(out, min_interval=checkpoint_every), resume=previous_run,
+                          stop_requested=lambda: bool(stop))
     except MethodError as error:
         raise HalfslipInputError(str(error), file=str(scene.path) if scene.path else None, field="solver.method") from None
     finally:
         progress.close()
-        signal.signal(signal.SIGTERM, previous)
-    write_result(result, out)
+        for sig, handler in handlers.items():
+            signal.signal(sig, handler)
     if not quiet:
         click.echo("\n".join(summarize(result, out)))
     if not result.attrs["complete"]:
-        click.echo(f"halfslip: interrupted; {result.sizes['t']} stored steps written to {out}", err=True)
+        click.echo(f"halfslip: interrupted after step {result.attrs['steps_done']}; "
+                   f"{result.sizes['t']} stored steps written to {out} (continue with --resume)", err=True)
         sys.exit(130)
 
 
@@ -243,3 +266,7 @@ def steady(scene_file: str, segment: int | None, output: str | None) -> None:
         from .io import write_result
 
         write_result(ds, output)
+
+
+if __name__ == "__main__":
+    main()

@@ -138,6 +138,9 @@ def simulate(
     method: str | None = None,
     nodes: int | None = None,
     progress: Callable[[int, int], None] | None = None,
+    writer=None,
+    resume=None,
+    stop_requested: Callable[[], bool] | None = None,
 ) -> xr.Dataset:
     """March ``scene``'s load history and return the result dataset of interface.md.
 
@@ -150,6 +153,16 @@ def simulate(
         Overrides ``scene.solver.nodes`` (general solver resolution).
     progress : callable(i, n), optional
         Called after each step with the step index and the number of steps.
+    writer : io.RunFileWriter, optional
+        Receives the partial result and a checkpoint whenever it is due, and the
+        final result; a killed process loses at most what came after the last write.
+    resume : tuple (Dataset, checkpoint), optional
+        An unfinished run (``io.read_result`` and ``io.read_checkpoint`` of its
+        file) to continue; the final result equals an uninterrupted run's.
+    stop_requested : callable() -> bool, optional
+        Polled between steps; when it returns True the run stops as if
+        interrupted (the command line sets it from SIGINT / SIGTERM, so a step
+        is never cut in half).
 
     Returns
     -------
@@ -158,74 +171,159 @@ def simulate(
         interrupted (KeyboardInterrupt), in which case every completed stored step
         is present.
     """
-    from . import __version__
-
     if nodes is not None:
         scene = dataclasses.replace(scene, solver=dataclasses.replace(scene.solver, nodes=int(nodes)))
-    name = choose_method(scene, method)
-    problem = NormalProblem(scene.profile, scene.material.compliance)
-    fields = tuple(f for f in FIELDS if f in scene.output.fields)
-    x = field_stations(scene, problem, scene.output.points) if fields else np.zeros(0)
-    save = SaveAt(scene.output.every, fields, x)
-    solver = build_method(scene, name, problem, x if "slip" in fields else None)
-
+    run = _Run(scene, choose_method(scene, method))
+    if resume is not None:
+        run.restore(*resume)
     h = scene.history
     n = h.n_steps
-    state = solver.initial_state(float(h.t[0]))
-    rec = _Records()
-    counters = {"steps": 0, "stick_steps": 0, "slip_solves": 0, "normal_solves": 0}
-    rec.add(state, Regime.SEPARATED)
-    if fields:
-        rec.add_fields(_fields(solver, state, save))
-    complete = 1
-    messages: list[str] = []
-    skipping = CycleSkipper(h, solver) if scene.solver.skip_steady_cycles else None
     started = time.perf_counter()
     try:
-        i = 1
-        while i <= n:
-            loads1 = Loads(float(h.P[i]), float(h.Q[i]), float(h.M[i]), float(h.sigma[i]))
-            state, report = solver.step(state, float(h.t[i]), loads1)
-            counters["steps"] += 1
-            counters["slip_solves"] += report.slipped
-            counters["stick_steps"] += report.regime == Regime.STICK
-            counters["normal_solves"] += report.normal_solved
-            if report.message and report.message not in messages:
-                messages.append(report.message)
-            if skipping is not None:
-                jump = skipping.check(i, state)
-                if jump is not None:
-                    i, state = jump
-            if save.stored(i, n) or (skipping is not None and skipping.jumped_to == i):
-                rec.add(state, report.regime)
-                if fields:
-                    rec.add_fields(_fields(solver, state, save))
+        while run.i < n:
+            if stop_requested is not None and stop_requested():
+                raise KeyboardInterrupt
+            run.advance()
             if progress is not None:
-                progress(i, n)
-            i += 1
+                progress(run.i, n)
+            if writer is not None and writer.due():
+                writer.write(run.dataset(complete=0, elapsed=time.perf_counter() - started), run.checkpoint(
+                    time.perf_counter() - started))
     except KeyboardInterrupt:
-        complete = 0
-    elapsed = time.perf_counter() - started
-    ds = _dataset(rec, save)
-    ds.attrs.update(
-        {
-            "title": f"halfslip run of {scene.name}",
-            "scene": scene.text,
-            "scene_name": scene.name,
-            "method": name,
-            "halfslip_version": __version__,
-            "complete": complete,
-            "friction": scene.friction,
-            "compliance": scene.material.compliance,
-            "shift_datum": getattr(solver, "datum", float("nan")),
-            "wall_time": elapsed,
-            "messages": "\n".join(messages),
-            "skipped_cycles": 0 if skipping is None else skipping.total,
-            "skipped_cycles_per_segment": "" if skipping is None else skipping.describe(),
-            **{f"count_{k}": v for k, v in counters.items()},
-        }
-    )
+        ds = run.dataset(complete=0, elapsed=time.perf_counter() - started)
+        if writer is not None:
+            writer.write(ds, run.checkpoint(time.perf_counter() - started))
+        return ds
+    ds = run.dataset(complete=1, elapsed=time.perf_counter() - started)
+    if writer is not None:
+        writer.write(ds)
     return ds
+
+
+def scene_hash(scene) -> str:
+    """SHA-256 of the scene text (of its repr for a scene built in Python)."""
+    import hashlib
+
+    text = scene.text if scene.text is not None else repr(scene)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+class _Run:
+    """Everything one march carries: solver, state, stored records, counters.
+
+    Only :func:`simulate` drives it; ``advance`` takes one step (or skips the
+    rest of a steady periodic segment).
+    """
+
+    def __init__(self, scene, name: str):
+        self.scene = scene
+        self.name = name
+        self.problem = NormalProblem(scene.profile, scene.material.compliance)
+        fields = tuple(f for f in FIELDS if f in scene.output.fields)
+        x = field_stations(scene, self.problem, scene.output.points) if fields else np.zeros(0)
+        self.save = SaveAt(scene.output.every, fields, x)
+        self.solver = build_method(scene, name, self.problem, x if "slip" in fields else None)
+        h = scene.history
+        self.i = 0
+        self.state = self.solver.initial_state(float(h.t[0]))
+        self.rec = _Records()
+        self.counters = {"steps": 0, "stick_steps": 0, "slip_solves": 0, "normal_solves": 0}
+        self.messages: list[str] = []
+        self.skipper = CycleSkipper(h, self.solver) if scene.solver.skip_steady_cycles else None
+        self.elapsed_before = 0.0
+        self._store(Regime.SEPARATED)
+
+    def _store(self, regime: Regime) -> None:
+        self.rec.add(self.state, regime)
+        if self.save.fields:
+            self.rec.add_fields(_fields(self.solver, self.state, self.save))
+
+    def advance(self) -> None:
+        h = self.scene.history
+        n = h.n_steps
+        i = self.i + 1
+        loads1 = Loads(float(h.P[i]), float(h.Q[i]), float(h.M[i]), float(h.sigma[i]))
+        state, report = self.solver.step(self.state, float(h.t[i]), loads1)
+        c = self.counters
+        c["steps"] += 1
+        c["slip_solves"] += report.slipped
+        c["stick_steps"] += report.regime == Regime.STICK
+        c["normal_solves"] += report.normal_solved
+        if report.message and report.message not in self.messages:
+            self.messages.append(report.message)
+        jumped = False
+        if self.skipper is not None:
+            jump = self.skipper.check(i, state)
+            if jump is not None:
+                i, state = jump
+                jumped = True
+        self.i, self.state = i, state
+        if self.save.stored(i, n) or jumped:
+            self._store(report.regime)
+
+    def dataset(self, complete: int, elapsed: float) -> xr.Dataset:
+        from . import __version__
+
+        ds = _dataset(self.rec, self.save)
+        scene = self.scene
+        ds.attrs.update(
+            {
+                "title": f"halfslip run of {scene.name}",
+                "scene": scene.text if scene.text is not None else "",
+                "scene_sha256": scene_hash(scene),
+                "scene_name": scene.name,
+                "method": self.name,
+                "halfslip_version": __version__,
+                "complete": complete,
+                "steps_done": self.i,
+                "friction": scene.friction,
+                "compliance": scene.material.compliance,
+                "shift_datum": getattr(self.solver, "datum", float("nan")),
+                "wall_time": self.elapsed_before + elapsed,
+                "messages": "\n".join(self.messages),
+                "skipped_cycles": 0 if self.skipper is None else self.skipper.total,
+                "skipped_cycles_per_segment": "" if self.skipper is None else self.skipper.describe(),
+                **{f"count_{k}": v for k, v in self.counters.items()},
+            }
+        )
+        return ds
+
+    def checkpoint(self, elapsed: float) -> dict:
+        sk = self.skipper
+        return {
+            "i": self.i,
+            "state": self.state,
+            "counters": dict(self.counters),
+            "messages": list(self.messages),
+            "elapsed": self.elapsed_before + elapsed,
+            "skipper": None if sk is None else {"previous": dict(sk.previous), "skipped": dict(sk.skipped)},
+        }
+
+    def restore(self, ds: xr.Dataset, checkpoint: dict) -> None:
+        """Continue from an unfinished run: its stored records and its checkpoint."""
+        from .errors import HalfslipInputError
+
+        if ds.attrs.get("scene_sha256") != scene_hash(self.scene):
+            raise HalfslipInputError("the file to resume was written by a different scene", field="--resume")
+        if ds.attrs.get("method") != self.name:
+            raise HalfslipInputError(f"the file to resume was run with method {ds.attrs.get('method')!r}",
+                                     field="--resume")
+        if checkpoint is None:
+            raise HalfslipInputError("the file holds a finished run: nothing to resume", field="--resume")
+        self.rec = _Records()
+        for k in self.rec.names:
+            values = ds[k].values if k != "t" else ds["t"].values
+            self.rec.cols[k] = [int(v) for v in values] if k == "regime" else [float(v) for v in values]
+        for k in self.save.fields:
+            self.rec.fields[k] = list(np.asarray(ds[k].values, float))
+        self.i = int(checkpoint["i"])
+        self.state = checkpoint["state"]
+        self.counters = dict(checkpoint["counters"])
+        self.messages = list(checkpoint["messages"])
+        self.elapsed_before = float(checkpoint["elapsed"])
+        if self.skipper is not None and checkpoint["skipper"] is not None:
+            self.skipper.previous = dict(checkpoint["skipper"]["previous"])
+            self.skipper.skipped = dict(checkpoint["skipper"]["skipped"])
 
 
 class CycleSkipper:
@@ -250,7 +348,6 @@ class CycleSkipper:
         self.t = history.t
         self.previous = {}
         self.skipped = {}
-        self.jumped_to = None
 
     @property
     def total(self) -> int:
@@ -271,7 +368,6 @@ class CycleSkipper:
         remaining = (seg.stop - i) // seg.steps_per_cycle
         per_cycle = state.dissipation - prev.dissipation
         self.skipped[k] = remaining
-        self.jumped_to = seg.stop
         new = dataclasses.replace(state, t=float(self.t[seg.stop]), dissipation=state.dissipation + remaining * per_cycle)
         return seg.stop, new
 
