@@ -142,8 +142,10 @@ class ExactMemory:
             w = min(max(k, -self.f), self.f)
             L1 = lv.lam(P1)
             W1 = Q0 + w * (P1 - P0)
-            if len(P) > 1 and abs((W[-1] - W[-2]) / (P[-1] - P[-2]) - w) <= 1e-12 * self.f:
-                # collinear with the top piece: move its end instead of adding a knot
+            through = W[-2] + (W1 - W[-2]) * (P0 - P[-2]) / (P1 - P[-2]) if len(P) > 1 else math.inf
+            if abs(through - Q0) <= 64 * _EPS * (self.f * P1 + abs(W1) + abs(Q0)):
+                # the old top knot lies on the line to the new one, to rounding:
+                # move the top piece's end instead of adding a knot
                 P[-1], W[-1], L[-1] = P1, W1, L1
                 Cc[-1] = Cc[-2] + (W1 - W[-2]) / (P1 - P[-2]) * (L1 - L[-2])
             else:
@@ -252,7 +254,8 @@ class ExactMemory:
                     continue
                 if lo >= hi:
                     continue
-            total += f * slope * self._kernel_integral(alpha, beta, lo, hi)
+            # K >= 0; a negative value is cancellation for a sliver of front travel
+            total += f * slope * max(self._kernel_integral(alpha, beta, lo, hi), 0.0)
         return self.A / math.pi * total
 
     def _kernel_integral(self, alpha, beta, lo, hi) -> float:
