@@ -878,7 +878,8 @@ class _PunchForms(_SymmetricForms):
             u = self._angle(excess)
             cycloid = _cycloid(u)
             log_load = np.log(a * a * cycloid / (2.0 * self.AR))
-            step = (log_target - log_load) * a * cycloid / (2.0 * excess * u)  # d ln P / dy = 2 (a - w) u / (a (u - sin u))
+            # d ln P / dy = 2 (a - w) u / (a (u - sin u))
+            step = (log_target - log_load) * a * cycloid / (2.0 * excess * u)
             y = np.minimum(y + step, y_max)
             if np.all(np.abs(step) <= 1e-12):
                 break
@@ -1065,10 +1066,15 @@ class NormalProblem:
         lowest, highest = _span(self.profile)
         tabulated = math.isfinite(lowest)
         if not result.converged:
-            where = " within the tabulated profile" if tabulated else ""
+            why = (
+                "the load or the moment is too large for the tabulated span, or the load so small that "
+                "the samples' roughness (not convex, e.g. spline ringing at a kink) breaks the single contact"
+                if tabulated
+                else "the general solver did not converge"
+            )
             raise ValueError(
-                f"no contact solution{where} for P={P!r}, M={M!r} (residual {result.residual:.3g} after "
-                f"{result.iterations} iterations): the load or the moment is too large"
+                f"no contact found for P={P!r}, M={M!r} (residual {result.residual:.3g} after "
+                f"{result.iterations} iterations): {why}"
             )
         left, right = result.center - result.half_width, result.center + result.half_width
         slack = 1e-12 * (highest - lowest) if tabulated else 0.0
