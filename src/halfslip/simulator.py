@@ -19,6 +19,7 @@ from .state import ContactState, Loads, Regime
 
 METHODS = ("auto", "exact", "general")
 FIELDS = ("p", "q", "slip")
+CHUNK = 4096  # steps per call of a compiled marcher
 
 
 class MethodError(ValueError):
@@ -103,19 +104,29 @@ def build_method(scene, name: str, problem: NormalProblem, stations: np.ndarray 
     return general.GeneralSolver(problem, scene.friction, scene.solver.nodes, stations=stations)
 
 
-@dataclass
 class _Records:
-    """Column buffers of the stored steps."""
+    """Column buffers of the stored steps.
+
+    Single steps go to a scalar buffer; chunks of steps from a compiled marcher
+    are kept as arrays. ``column(name)`` joins both in order.
+    """
 
     names = ("t", "P", "Q", "M", "sigma", "contact_left", "contact_right",
              "stick_left", "stick_right", "regime", "shift", "dissipation")
 
-    def __post_init__(self):
-        self.cols = {k: [] for k in self.names}
+    def __init__(self):
+        self.chunks = {k: [] for k in self.names}
+        self.buffer = {k: [] for k in self.names}
         self.fields = {}
 
+    def _flush(self):
+        if self.buffer["t"]:
+            for k in self.names:
+                self.chunks[k].append(np.asarray(self.buffer[k], np.int8 if k == "regime" else float))
+                self.buffer[k] = []
+
     def add(self, state: ContactState, regime: Regime):
-        c = self.cols
+        c = self.buffer
         c["t"].append(state.t)
         for k, v in zip(("P", "Q", "M", "sigma"), state.loads):
             c[k].append(v)
@@ -127,9 +138,29 @@ class _Records:
         c["shift"].append(state.shift)
         c["dissipation"].append(state.dissipation)
 
+    def add_steps(self, steps: dict, mask: np.ndarray):
+        """Append the masked entries of per-step arrays (keys as ``names``)."""
+        self._flush()
+        for k in self.names:
+            self.chunks[k].append(np.asarray(steps[k], np.int8 if k == "regime" else float)[mask])
+
     def add_fields(self, values: dict):
         for k, v in values.items():
             self.fields.setdefault(k, []).append(v)
+
+    def column(self, name: str) -> np.ndarray:
+        self._flush()
+        parts = self.chunks[name]
+        dtype = np.int8 if name == "regime" else float
+        return np.concatenate(parts).astype(dtype, copy=False) if parts else np.zeros(0, dtype)
+
+    def load(self, ds: xr.Dataset, fields) -> None:
+        """Start from the stored steps of an unfinished run."""
+        for k in self.names:
+            self.chunks[k] = [np.asarray(ds[k].values, np.int8 if k == "regime" else float)]
+            self.buffer[k] = []
+        for k in fields:
+            self.fields[k] = list(np.asarray(ds[k].values, float))
 
 
 def simulate(
@@ -231,6 +262,8 @@ class _Run:
         self.messages: list[str] = []
         self.skipper = CycleSkipper(h, self.solver) if scene.solver.skip_steady_cycles else None
         self.elapsed_before = 0.0
+        # compiled marching of many steps at once where the solver offers it (extents only)
+        self.chunked = not fields and getattr(self.solver, "can_march", False)
         self._store(Regime.SEPARATED)
 
     def _store(self, regime: Regime) -> None:
@@ -239,6 +272,10 @@ class _Run:
             self.rec.add_fields(_fields(self.solver, self.state, self.save))
 
     def advance(self) -> None:
+        """One step, or with a compiled solver a chunk of steps up to the next cycle end."""
+        if self.chunked:
+            self._advance_chunk()
+            return
         h = self.scene.history
         n = h.n_steps
         i = self.i + 1
@@ -260,6 +297,37 @@ class _Run:
         self.i, self.state = i, state
         if self.save.stored(i, n) or jumped:
             self._store(report.regime)
+
+    def _advance_chunk(self) -> None:
+        h = self.scene.history
+        n = h.n_steps
+        i0 = self.i
+        stop = min(n, i0 + CHUNK)
+        if self.skipper is not None:
+            stop = min(stop, self.skipper.next_end(i0))
+        idx = np.arange(i0 + 1, stop + 1)
+        state, steps = self.solver.march(self.state, h.t[idx], h.P[idx], h.Q[idx])
+        regime = steps["regime"]
+        c = self.counters
+        c["steps"] += len(idx)
+        c["slip_solves"] += int(np.count_nonzero(regime >= Regime.PARTIAL_SLIP))
+        c["stick_steps"] += int(np.count_nonzero(regime == Regime.STICK))
+        c["normal_solves"] += int(np.count_nonzero(steps["normal_solved"]))
+        gross = (regime == Regime.GROSS_SLIDING) & (np.abs(h.Q[idx]) > self.scene.friction * h.P[idx] * (1 + 1e-12))
+        if gross.any():
+            message = "abs(Q) > f P: gross sliding, shear force carried limited to f P"
+            if message not in self.messages:
+                self.messages.append(message)
+        mask = (idx % self.save.every == 0) | (idx == n)
+        jump = self.skipper.check(stop, state) if self.skipper is not None else None
+        if jump is not None:
+            mask[-1] = False  # the jumped state is stored in its place, as in the step path
+        steps.update(t=h.t[idx], P=h.P[idx], Q=h.Q[idx], M=h.M[idx], sigma=h.sigma[idx])
+        self.rec.add_steps(steps, mask)
+        self.i, self.state = stop, state
+        if jump is not None:
+            self.i, self.state = jump
+            self._store(Regime(int(regime[-1])))
 
     def dataset(self, complete: int, elapsed: float) -> xr.Dataset:
         from . import __version__
@@ -311,11 +379,7 @@ class _Run:
         if checkpoint is None:
             raise HalfslipInputError("the file holds a finished run: nothing to resume", field="--resume")
         self.rec = _Records()
-        for k in self.rec.names:
-            values = ds[k].values if k != "t" else ds["t"].values
-            self.rec.cols[k] = [int(v) for v in values] if k == "regime" else [float(v) for v in values]
-        for k in self.save.fields:
-            self.rec.fields[k] = list(np.asarray(ds[k].values, float))
+        self.rec.load(ds, self.save.fields)
         self.i = int(checkpoint["i"])
         self.state = checkpoint["state"]
         self.counters = dict(checkpoint["counters"])
@@ -341,6 +405,7 @@ class CycleSkipper:
     def __init__(self, history, solver):
         self.same = getattr(solver, "same_state", None)
         self.ends = {}  # step index of a cycle end -> (segment index, segment)
+        self._sorted_ends = None
         for k, seg in enumerate(history.segments):
             if seg.kind == "cycles" and seg.count and seg.count > 2:
                 for j in range(1, seg.count):
@@ -348,6 +413,13 @@ class CycleSkipper:
         self.t = history.t
         self.previous = {}
         self.skipped = {}
+
+    def next_end(self, i: int) -> int:
+        """The first cycle end after step i (a large number when there is none)."""
+        if self._sorted_ends is None:
+            self._sorted_ends = np.array(sorted(self.ends), dtype=np.int64)
+        k = int(np.searchsorted(self._sorted_ends, i, side="right"))
+        return int(self._sorted_ends[k]) if k < len(self._sorted_ends) else 1 << 62
 
     @property
     def total(self) -> int:
@@ -407,12 +479,11 @@ _META = {
 
 
 def _dataset(rec: _Records, save: SaveAt) -> xr.Dataset:
-    cols = rec.cols
-    t = np.asarray(cols["t"], float)
+    t = rec.column("t")
     data = {}
     for k in rec.names[1:]:
         dtype = np.int8 if k == "regime" else float
-        data[k] = ("t", np.asarray(cols[k], dtype))
+        data[k] = ("t", rec.column(k).astype(dtype, copy=False))
     coords = {"t": t}
     if save.fields:
         coords["x"] = save.x

@@ -42,7 +42,7 @@ import numpy as np
 
 from ..geometry import NormalProblem
 from ..state import ContactState, Loads, Regime, StepReport
-from .levels import LevelIntegrals, level_integrals
+from .levels import HertzLevels, LevelIntegrals, level_integrals
 
 _EPS = np.finfo(float).eps
 
@@ -229,8 +229,10 @@ class ExactMemory:
         c_end = min(c1, 0.0)  # beyond H(0) = 0 the contact slides grossly
         lv = self.levels
         total = 0.0
-        for j in range(len(P) - 1):
+        for j in range(len(P) - 2, -1, -1):  # from the top down, as the front travels
             Pa, Pb = P[j], P[j + 1]
+            if s * W[j + 1] - f * Pb >= c_end:
+                break  # H at this piece's top is above the front's final level: done
             if Pb <= Pa:
                 continue
             w = (W[j + 1] - W[j]) / (Pb - Pa)
@@ -374,6 +376,56 @@ class ExactMemory:
         )
         report = StepReport(regime, regime in (Regime.PARTIAL_SLIP, Regime.GROSS_SLIDING), P_changed, message)
         return new_state, report
+
+    @property
+    def can_march(self) -> bool:
+        """Whether :meth:`march` (compiled, Hertz, extents only) serves this instance."""
+        from ._exact_kernel import march_hertz
+
+        return march_hertz is not None and isinstance(self.levels, HertzLevels) and self.stations is None
+
+    def march(self, state: ContactState, t: np.ndarray, P: np.ndarray, Q: np.ndarray):
+        """Many straight steps at once, compiled (see ``_exact_kernel``); extents only.
+
+        Parameters
+        ----------
+        state : ContactState
+        t, P, Q : ndarray, shape (k,)
+            Times and loads of the next k sampled points.
+
+        Returns
+        -------
+        state : ContactState
+            The state after the last point.
+        steps : dict of ndarray, shape (k,)
+            Per step: ``regime``, ``contact_left/right``, ``stick_left/right``,
+            ``shift``, ``dissipation`` (cumulative), ``normal_solved``.
+        """
+        from ._exact_kernel import march_hertz
+
+        mem = state.memory
+        k = len(P)
+        n = len(mem.P)
+        cap = n + 2 * k + 2
+        arrays = [np.zeros(cap) for _ in range(4)]
+        for a, src in zip(arrays, (mem.P, mem.W, mem.L, mem.C)):
+            a[:n] = src
+        level, regime, D = np.empty(k), np.empty(k, np.int8), np.empty(k)
+        top_W, top_C = np.empty(k), np.empty(k)
+        P = np.asarray(P, float)
+        n = march_hertz(*arrays, n, P, np.asarray(Q, float), self.f, self.A, self.levels.ln_alpha,
+                        state.dissipation, level, regime, D, top_W, top_C)
+        a = np.where(regime > 0, self.problem.half_width(np.maximum(P, 0.0)), np.nan)
+        b = np.where(regime == Regime.STICK, a, np.where(regime == Regime.PARTIAL_SLIP,
+                                                       self.problem.half_width(level), np.nan))
+        shift = mem.v0 - self.A / math.pi * (top_C - top_W * self._ln2l)
+        previous_P = np.concatenate([[state.loads.P], P[:-1]])
+        new_mem = LevelMemory(*(tuple(x[:n].tolist()) for x in arrays), mem.v0, mem.phi_ref)
+        last = ContactState(float(t[-1]), Loads(float(P[-1]), float(Q[-1]), 0.0, 0.0), float(-a[-1]), float(a[-1]),
+                            float(-b[-1]), float(b[-1]), float(shift[-1]), float(D[-1]), new_mem)
+        steps = {"regime": regime, "contact_left": -a, "contact_right": a, "stick_left": -b, "stick_right": b,
+                 "shift": shift, "dissipation": D, "normal_solved": P != previous_P}
+        return last, steps
 
     def same_state(self, a: ContactState, b: ContactState) -> bool:
         """Whether two states have the same memory, to rounding (1e-12 of f P_max).
