@@ -11,6 +11,8 @@ from .histories import LoadHistory, Segment
 from .scene import OutputOptions, Scene, SolverOptions, load_scene, parse_scene
 from .simulator import simulate
 from .steady import steady_state
+from .sweep import sweep
+from . import post  # registers the ds.halfslip accessor
 
 try:
     __version__ = version("halfslip")
@@ -34,4 +36,5 @@ __all__ = [
     "parse_scene",
     "simulate",
     "steady_state",
+    "sweep",
 ]
