@@ -206,16 +206,29 @@ def run(scene_file: str, output: str | None, method: str | None, nodes: int | No
 
 
 def summarize(result, path) -> list[str]:
-    """The lines ``halfslip run`` prints when done."""
+    """The lines ``halfslip run`` prints when done.
+
+    Regimes met and their share of the stored steps, the final contact and
+    stick zone, for cyclic runs the permanent stick zone (intersection of the
+    stick zones over the last full cycle) and the dissipation per cycle, the
+    speed and the output path. Derived quantities come from
+    :mod:`halfslip.post`; a line that cannot be derived (e.g. an interrupted
+    run without a full cycle) is left out.
+    """
+    import re
+
     import numpy as np
 
+    from . import post
     from .state import Regime
 
     regime = result["regime"].values[1:] if result.sizes["t"] > 1 else result["regime"].values
     steps = int(result.attrs["count_steps"])
     wall = float(result.attrs["wall_time"])
+    skipped = int(result.attrs.get("skipped_cycles", 0))
+    marched = f"{steps} steps marched" + (f", {skipped} steady cycles skipped as repeats" if skipped else "")
     lines = [
-        f"halfslip run of {result.attrs['scene_name']}: {steps} steps, method {result.attrs['method']}, "
+        f"halfslip run of {result.attrs['scene_name']}: {marched}, method {result.attrs['method']}, "
         f"{wall:.3g} s ({steps / wall if wall > 0 else float('inf'):,.0f} steps/s)",
         "  regimes of stored steps: "
         + ", ".join(
@@ -229,9 +242,29 @@ def summarize(result, path) -> list[str]:
         f"  final contact [{float(last.contact_left):.6g}, {float(last.contact_right):.6g}] m, "
         f"stick zone [{float(last.stick_left):.6g}, {float(last.stick_right):.6g}] m"
     )
-    lines.append(f"  dissipated {float(last.dissipation):.6g} J/m")
+    try:
+        table = post.cycles(result)
+    except HalfslipInputError:
+        table = None
+    if table is not None and table.sizes["cycle"]:
+        zone = post.permanent_stick(result)
+        row = table.isel(cycle=-1)
+        where = f"last full cycle, t = {float(row.t_start):g} .. {float(row.t_stop):g} s"
+        if np.isfinite(float(zone["left"])):
+            lines.append(f"  permanent stick zone [{float(zone['left']):.6g}, {float(zone['right']):.6g}] m ({where})")
+        else:
+            lines.append(f"  permanent stick zone: none, no point sticks throughout the {where}")
+        energy = post.dissipation_per_cycle(result)["dissipation"].values
+        first = f", first cycle {energy[0]:.6g} J/m" if energy.size > 1 else ""
+        lines.append(f"  dissipation per cycle {energy[-1]:.6g} J/m (last full cycle){first}")
+    lines.append(f"  dissipated {float(last.dissipation):.6g} J/m in total")
+    # one note per kind of solver message (messages differing only in numbers are one kind)
+    groups: dict[str, list[str]] = {}
     for message in filter(None, str(result.attrs.get("messages", "")).split("\n")):
-        lines.append(f"  note: {message}")
+        groups.setdefault(re.sub(r"[-+]?\d[\d.]*(?:e[-+]?\d+)?", "#", message), []).append(message)
+    for similar in groups.values():
+        more = f" (and {len(similar) - 1} more like it)" if len(similar) > 1 else ""
+        lines.append(f"  note: {similar[0]}{more}")
     lines.append(f"  written to {path}")
     return lines
 
@@ -266,6 +299,125 @@ def steady(scene_file: str, segment: int | None, output: str | None) -> None:
         from .io import write_result
 
         write_result(ds, output)
+
+
+@main.command()
+@click.argument("result_file", metavar="OUT.h5")
+@click.option("-o", "--output", "output", metavar="FIG.png|FOLDER",
+              help="A figure file (one kind, or several as FIG-<kind>.png) or a folder; "
+                   "default: OUT-<kind>.png next to OUT.h5.")
+@click.option("--kind", "kinds", multiple=True, type=click.Choice(["trajectory", "map", "tractions", "slip"]),
+              help="Figure kind (repeat for several; default: all the stored fields allow).")
+@click.option("--at", "at", multiple=True, metavar="T",
+              help="Time [s] of a tractions snapshot (repeat, or separate with commas).")
+def plot(result_file: str, output: str | None, kinds: tuple, at: tuple) -> None:
+    """Pictures of a run: loading path, stick-slip map, tractions, slip and energy.
+
+    Prints the path of every figure written. Bad input (missing file, not a
+    halfslip result, a kind needing fields the run did not store) exits 2.
+    """
+    from pathlib import Path
+
+    from . import plot as plots
+    from .io import read_result
+    from .post import check_result
+
+    source = Path(result_file)
+    if not source.is_file():
+        raise HalfslipInputError("no such file" if not source.exists() else "is not a file", file=result_file)
+    try:
+        ds = read_result(source)
+    except Exception as error:  # h5py / h5netcdf raise OSError, ValueError, KeyError ...
+        raise HalfslipInputError(f"not a halfslip result (cannot read it: {type(error).__name__})",
+                                 file=result_file) from None
+    ds.encoding["source"] = str(source)
+    try:
+        check_result(ds)
+    except HalfslipInputError as error:
+        raise error.located(result_file, None) from None
+    times = []
+    for text in at:
+        for part in filter(None, (piece.strip() for piece in text.split(","))):
+            try:
+                times.append(float(part))
+            except ValueError:
+                raise HalfslipInputError(f"expected a time in seconds, got {part!r}", field="--at") from None
+    chosen = list(kinds) if kinds else None
+    if chosen is None:
+        for kind in plots.KINDS:
+            missing = [name for name in plots.NEEDS[kind] if name not in ds.data_vars]
+            if missing:
+                click.echo(f"halfslip: note: no {kind} figure: the run did not store {', '.join(missing)}", err=True)
+    if not ds.attrs.get("complete", 1):
+        click.echo("halfslip: note: the run is unfinished; the figures show the steps done", err=True)
+    out = Path(output) if output else source.parent
+    try:
+        written = plots.plot_run(ds, out, kinds=chosen, at=times or None)
+    except HalfslipInputError as error:
+        raise error.located(result_file, None) from None
+    for path in written:
+        click.echo(str(path))
+
+
+
+
+@main.command(name="sweep")
+@click.argument("sweep_file", metavar="SWEEP.yaml")
+@click.option("-o", "--output", "output", metavar="OUT.h5",
+              help="Result file (default: the sweep file's name with .h5, here). Rerun with the same "
+                   "file to finish an interrupted sweep.")
+@click.option("--workers", type=click.IntRange(min=1), metavar="N",
+              help="Local worker processes (default: the number of cores; 1 runs in this process).")
+@click.option("--scheduler", metavar="ADDRESS", help="Run the cases on this dask.distributed scheduler.")
+@click.option("--cases-dir", "cases_dir", metavar="DIR", help="Also write each case's full result to DIR.")
+@click.option("--quiet", is_flag=True, help="Print nothing but errors.")
+def sweep_command(sweep_file: str, output: str | None, workers: int | None, scheduler: str | None,
+                  cases_dir: str | None, quiet: bool) -> None:
+    """Run every case of a sweep file and write one dataset of per-case summaries.
+
+    Ctrl-C or SIGTERM stops the sweep and writes the finished cases (exit
+    status 130); the same command then runs only the cases not yet done.
+    Failing cases are recorded in the ``status`` variable and do not stop the
+    sweep.
+    """
+    import signal
+    import sys
+    from pathlib import Path
+
+    from .sweep import load_sweep
+    from .sweep import sweep as run_sweep
+
+    spec = load_sweep(sweep_file)
+    out = Path(output) if output else Path(f"{Path(sweep_file).stem}.h5")
+
+    def _terminate(signum, frame):  # SIGTERM behaves like Ctrl-C: stop and keep what is done
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, _terminate)
+    try:
+        result = run_sweep(spec, output=out, workers=workers, scheduler=scheduler, cases_dir=cases_dir,
+                           progress=not quiet)
+    except ImportError as error:
+        raise click.ClickException(str(error)) from None
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    done, total = int(result.attrs["count_done"]), int(result.attrs["count_cases"])
+    failed = int(result.attrs["count_failed"])
+    if not quiet:
+        click.echo(
+            f"halfslip sweep of {spec.scene_path.name}: {total} cases over {', '.join(spec.paths)}; "
+            f"ran {result.attrs['count_run']} ({result.attrs['backend']}) in {float(result.attrs['wall_time']):.3g} s; "
+            f"{done - failed} ok, {failed} failed; written to {out}"
+        )
+    if failed:
+        statuses = result["status"].values.reshape(-1)
+        first = next(s for s in statuses if s not in ("ok", "not run"))
+        click.echo(f"halfslip: warning: {failed} of {total} cases failed (see the status variable); "
+                   f"first: {first}", err=True)
+    if not result.attrs["complete"]:
+        click.echo(f"halfslip: interrupted; {done} of {total} cases written to {out}; "
+                   "run the same command again to finish", err=True)
+        sys.exit(130)
 
 
 if __name__ == "__main__":
