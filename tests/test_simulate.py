@@ -72,3 +72,14 @@ def test_exact_method_on_a_scene_it_cannot_serve_is_a_clear_error(tmp_path):
 def test_auto_picks_exact_for_symmetric_scene_without_moment_or_tension():
     scene = hs.load_scene(EXAMPLES / "motor.yaml")
     assert hs.simulate(scene).attrs["method"] == "exact"
+
+
+def test_cyclic_run_carries_the_permanent_stick_zone():
+    """hertz_pad: the run's scalars equal a(P - dQ/(2f)) (turning points sampled: 1e-10)."""
+    ds = hs.simulate(hs.load_scene(EXAMPLES / "hertz_pad.yaml"))
+    scene = hs.load_scene(EXAMPLES / "hertz_pad.yaml")
+    problem = hs.NormalProblem(scene.profile, scene.material.compliance)
+    c = float(problem.half_width(1e5 - 2 * 1.8e4 / (2 * 0.6)))
+    assert float(ds.permanent_stick_right) == pytest.approx(c, rel=1e-10)
+    assert float(ds.permanent_stick_left) == pytest.approx(-c, rel=1e-10)
+    assert ds.permanent_stick_right.attrs["units"] == "m"

@@ -226,9 +226,24 @@ def simulate(
             writer.write(ds, run.checkpoint(time.perf_counter() - started))
         return ds
     ds = run.dataset(complete=1, elapsed=time.perf_counter() - started)
+    _add_permanent_stick(ds)
     if writer is not None:
         writer.write(ds)
     return ds
+
+
+def _add_permanent_stick(ds: xr.Dataset) -> None:
+    """Scalars permanent_stick_left/right of the last full cycle (cyclic histories only)."""
+    from . import post
+    from .errors import HalfslipInputError
+
+    try:
+        zone = post.permanent_stick(ds)
+    except HalfslipInputError:  # no cycles segment, or no full cycle stored
+        return
+    for side in ("left", "right"):
+        ds[f"permanent_stick_{side}"] = ((), float(zone[side]), {
+            "units": "m", "long_name": f"{side} edge of the permanent stick zone (last full cycle)"})
 
 
 def scene_hash(scene) -> str:
