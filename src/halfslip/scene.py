@@ -195,17 +195,21 @@ def load_scene(path: str | os.PathLike) -> Scene:
         file, line and field path.
     """
     path = Path(path)
+    return parse_scene(read_input_text(path, "scene"), path=path)
+
+
+def read_input_text(path: Path, what: str) -> str:
+    """The UTF-8 text of an input file, or a one-line HalfslipInputError naming it."""
     try:
-        text = path.read_text(encoding="utf-8")
+        return path.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise HalfslipInputError("no such file", file=str(path)) from None
     except IsADirectoryError:
-        raise HalfslipInputError("is a directory, not a scene file", file=str(path)) from None
+        raise HalfslipInputError(f"is a directory, not a {what} file", file=str(path)) from None
     except UnicodeDecodeError:
         raise HalfslipInputError("is not UTF-8 text", file=str(path)) from None
     except OSError as error:
         raise HalfslipInputError(f"cannot read: {error.strerror}", file=str(path)) from None
-    return parse_scene(text, path=path)
 
 
 def parse_scene(

@@ -56,7 +56,7 @@ import xarray as xr
 import yaml
 
 from .errors import HalfslipInputError, check_bool, check_count, check_mapping, check_number, describe, join
-from .scene import _line_of, _read_yaml, parse_scene
+from .scene import _line_of, _read_yaml, parse_scene, read_input_text
 
 __all__ = [
     "SUMMARIES",
@@ -361,17 +361,7 @@ def load_sweep(path: str | os.PathLike) -> Sweep:
         and field.
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise HalfslipInputError("no such file", file=str(path)) from None
-    except IsADirectoryError:
-        raise HalfslipInputError("is a directory, not a sweep file", file=str(path)) from None
-    except UnicodeDecodeError:
-        raise HalfslipInputError("is not UTF-8 text", file=str(path)) from None
-    except OSError as error:
-        raise HalfslipInputError(f"cannot read: {error.strerror}", file=str(path)) from None
-    return parse_sweep(text, path=path)
+    return parse_sweep(read_input_text(path, "sweep"), path=path)
 
 
 def parse_sweep(
