@@ -60,6 +60,9 @@ DEFAULT_STEPS_PER_CYCLE = 64
 
 _RELATIVE_TOLERANCE = 1e-9
 
+MAX_STEPS = 20_000_000
+"""Most sampled steps a history may have (five float arrays of this length: 0.8 GB)."""
+
 
 @dataclass(frozen=True)
 class Harmonic:
@@ -478,6 +481,15 @@ class _Builder:
         self.index += t.size
         self.t_now = float(t[-1])
 
+    def reserve(self, steps: int, field: str) -> None:
+        """Refuse a history longer than MAX_STEPS before allocating it."""
+        if self.index + steps > MAX_STEPS:
+            raise HalfslipInputError(
+                f"the history would have {self.index + steps:,} steps; at most {MAX_STEPS:,} are supported "
+                "(use fewer steps per segment, or rely on skip_steady_cycles with fewer cycles per segment)",
+                field=field,
+            )
+
     def ramp(self, body: Any, field: str, line: int | None) -> None:
         """Add a ramp segment from its spec."""
         check_mapping(body, field, ("to", "duration", "steps"), ("to", "duration"))
@@ -485,6 +497,7 @@ class _Builder:
         ends = {name: check_number(value, join(join(field, "to"), name)) for name, value in targets.items()}
         duration = check_number(body["duration"], join(field, "duration"), positive=True)
         steps = check_count(body.get("steps", 1), join(field, "steps"))
+        self.reserve(steps, join(field, "steps"))
         fraction = np.arange(1, steps + 1) / steps
         values = {name: self.current[name] * (1.0 - fraction) + end * fraction for name, end in ends.items()}
         self.append(self.t_now + duration * fraction, values, kind="ramp", line=line)
@@ -494,6 +507,7 @@ class _Builder:
         check_mapping(body, field, ("duration", "steps"), ("duration",))
         duration = check_number(body["duration"], join(field, "duration"), positive=True)
         steps = check_count(body.get("steps", 1), join(field, "steps"))
+        self.reserve(steps, join(field, "steps"))
         fraction = np.arange(1, steps + 1) / steps
         self.append(self.t_now + duration * fraction, {}, kind="hold", line=line)
 
@@ -503,6 +517,7 @@ class _Builder:
         count = check_count(body["count"], join(field, "count"))
         period = check_number(body["period"], join(field, "period"), positive=True)
         per_cycle = check_count(body.get("steps_per_cycle", DEFAULT_STEPS_PER_CYCLE), join(field, "steps_per_cycle"))
+        self.reserve(count * per_cycle, join(field, "count"))
         harmonics = {}
         for name in LOADS:
             load_field = join(field, name)
