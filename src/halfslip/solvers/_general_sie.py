@@ -28,7 +28,10 @@ The identities used (k >= 0):
 The consistency condition gamma_0 = 0 and the force (pi/2) gamma_1 are the
 two equations that fix the stick-zone edges; for a G that is piecewise linear
 in x they are evaluated exactly (:func:`linear_moments`), so the edges come
-out to rounding for the interpolated data.
+out to rounding for the interpolated data. For such a G the bounded solution
+and its Hilbert transform outside the interval are also closed forms
+(:func:`bounded_linear`, :func:`hilbert_linear_outside`); the series serves
+the outside strain away from the interval's ends, where it converges fast.
 """
 from __future__ import annotations
 
@@ -62,8 +65,15 @@ def coefficients(values: np.ndarray) -> np.ndarray:
     return gamma
 
 
-def linear_moments(x: np.ndarray, y: np.ndarray, b1: float, b2: float) -> tuple[np.ndarray, np.ndarray]:
+def linear_moments(x: np.ndarray, y: np.ndarray, b1: float, b2: float, derivatives: bool = False):
     """Exact (gamma_0, gamma_1) of the piecewise-linear interpolant of (x, y) on [b1, b2].
+
+    With x = m + r cos th, and G' = sigma_j on piece j,
+
+        d gamma_0 / d b1,2 = (1/2pi) int G' (1 -+ cos th) dth,
+        d gamma_1 / d b1,2 = (1/pi)  int G' (1 -+ cos th) cos th dth
+
+    (the interval [0, pi] in th does not move), evaluated in the same pass.
 
     Parameters
     ----------
@@ -73,38 +83,46 @@ def linear_moments(x: np.ndarray, y: np.ndarray, b1: float, b2: float) -> tuple[
         Values (k functions at once).
     b1, b2 : float
         The interval.
+    derivatives : bool
+        Also return the derivatives with respect to b1 and b2.
 
     Returns
     -------
-    gamma0, gamma1 : ndarray, shape () or (k,)
-        (1/pi) int G dth and (2/pi) int G cos th dth, x = m + r cos th.
+    gamma : ndarray, shape (2,) or (2, k)
+        gamma_0 = (1/pi) int G dth and gamma_1 = (2/pi) int G cos th dth.
+    d_gamma : ndarray, shape (2, 2) or (2, 2, k), only with ``derivatives``
+        d_gamma[i, j] = d gamma_i / d b_{j+1}.
     """
     lo = int(np.searchsorted(x, b1, side="right"))
     hi = int(np.searchsorted(x, b2, side="left"))
-    y1 = _lerp(x, y, b1, lo)
-    y2 = _lerp(x, y, b2, hi)
     xs = np.concatenate(([b1], x[lo:hi], [b2]))
-    ys = np.concatenate(([y1], y[lo:hi], [y2]))
+    ys = np.concatenate(([_lerp(x, y, b1, lo)], y[lo:hi], [_lerp(x, y, b2, hi)]))
     m = 0.5 * (b1 + b2)
     r = 0.5 * (b2 - b1)
     sin_th = np.sqrt(np.maximum((xs - b1) * (b2 - xs), 0.0)) / r
     cos_th = np.clip((xs - m) / r, -1.0, 1.0)
     th = np.arctan2(sin_th, cos_th)
     dx = np.diff(xs)
-    keep = dx > 0.0
-    shape = (-1,) + (1,) * (ys.ndim - 1)
-    slope = np.diff(ys, axis=0) / np.where(keep, dx, 1.0).reshape(shape)
-    slope = np.where(keep.reshape(shape), slope, 0.0)
-    alpha = ys[:-1] + slope * (m - xs[:-1]).reshape(shape)
-    beta = slope * r
     # piece j runs from th[j] (its left end, the larger angle) down to th[j + 1]
-    d_th = (th[:-1] - th[1:]).reshape(shape)
-    d_sin = (sin_th[:-1] - sin_th[1:]).reshape(shape)
-    sin2 = 2.0 * sin_th * cos_th
-    d_sin2 = (sin2[:-1] - sin2[1:]).reshape(shape)
-    gamma0 = np.sum(alpha * d_th + beta * d_sin, axis=0) / math.pi
-    gamma1 = 2.0 * np.sum(alpha * d_sin + beta * (0.5 * d_th + 0.25 * d_sin2), axis=0) / math.pi
-    return gamma0, gamma1
+    d_th = th[:-1] - th[1:]
+    d_sin = sin_th[:-1] - sin_th[1:]
+    sin2 = sin_th * cos_th
+    d_half = 0.5 * d_th + 0.5 * (sin2[:-1] - sin2[1:])  # int cos^2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv = np.where(dx > 0.0, 1.0 / dx, 0.0)
+    slope = (np.diff(ys, axis=0).T * inv).T
+    alpha = ys[:-1] + (slope.T * (m - xs[:-1])).T
+    w = np.stack([d_th, d_sin, d_half])  # (3, pieces)
+    A = w @ alpha  # (3,) or (3, k): int alpha, int alpha cos, int alpha cos^2
+    S = w @ slope  # the same with sigma
+    gamma = np.stack([A[0] + r * S[1], 2.0 * (A[1] + r * S[2])]) / math.pi
+    if not derivatives:
+        return gamma
+    d_gamma = np.stack([
+        np.stack([S[0] - S[1], S[0] + S[1]]) / (2.0 * math.pi),
+        np.stack([S[1] - S[2], S[1] + S[2]]) / math.pi,
+    ])
+    return gamma, d_gamma
 
 
 def _lerp(x: np.ndarray, y: np.ndarray, at: float, i: int) -> np.ndarray:
@@ -112,28 +130,6 @@ def _lerp(x: np.ndarray, y: np.ndarray, at: float, i: int) -> np.ndarray:
     i = min(max(i, 1), x.size - 1)
     w = (at - x[i - 1]) / (x[i] - x[i - 1])
     return y[i - 1] + w * (y[i] - y[i - 1])
-
-
-def bounded_inside(gamma: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """phi(t) = sqrt(1 - t^2) sum_{k>=1} gamma_k U_{k-1}(t) for |t| <= 1 (0 beyond).
-
-    Parameters
-    ----------
-    gamma : ndarray, shape (n,)
-        Coefficients gamma_0..gamma_{n-1} (gamma_0 is ignored).
-    t : ndarray, any shape
-
-    Returns
-    -------
-    ndarray, shape of t
-    """
-    t = np.asarray(t, dtype=float)
-    th = np.arccos(np.clip(t, -1.0, 1.0))
-    c = np.array(gamma, dtype=float)
-    c[0] = 0.0
-    # sum gamma_k sin(k th) = Im sum gamma_k z^k, z = exp(i th)
-    out = np.polynomial.polynomial.polyval(np.exp(1j * th), c).imag
-    return np.where(np.abs(t) <= 1.0, out, 0.0)
 
 
 def bounded_linear(s: np.ndarray, g: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -168,13 +164,14 @@ def bounded_linear(s: np.ndarray, g: np.ndarray, t: np.ndarray) -> np.ndarray:
     knots = s[:-1][keep][1:]
     c = 0.5 * np.diff(slope)
     b = slope[0] + np.sum(c)
-    th0 = np.arccos(t)
-    sin0 = np.sin(th0)
+    sin0 = np.sqrt(np.maximum(1.0 - t * t, 0.0))
     thk = np.arccos(knots)
-    out = b * sin0 + sin0 * (np.sum(c * (2.0 * thk - math.pi)) / math.pi)
+    sink = np.sqrt(np.maximum(1.0 - knots * knots, 0.0))
+    out = sin0 * (b + np.sum(c * (2.0 * thk - math.pi)) / math.pi)
+    # ln|sin((th0 + thk)/2) / sin((th0 - thk)/2)| = ln|(1 - t s_k + sin th0 sin thk) / (t - s_k)|
+    diff = t[:, None] - knots
     with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.sin(0.5 * (th0[:, None] + thk)) / np.sin(0.5 * (th0[:, None] - thk))
-        term = (t[:, None] - knots) * np.log(np.abs(ratio))
+        term = diff * np.log(np.abs((1.0 - t[:, None] * knots + sin0[:, None] * sink) / diff))
     term = np.where(np.isfinite(term), term, 0.0)
     return out + (2.0 / math.pi) * (term @ c)
 
@@ -245,9 +242,12 @@ def hilbert_outside(gamma: np.ndarray, t: np.ndarray) -> np.ndarray:
     -------
     ndarray, shape of t
     """
-    c = np.array(gamma, dtype=float)
+    r = rho(t)
+    big = float(np.max(np.abs(r), initial=0.0))
+    terms = gamma.size if big >= 1.0 else min(gamma.size, 2 + int(math.log(1e-17) / math.log(max(big, 1e-300))))
+    c = np.array(gamma[:terms], dtype=float)
     c[0] = 0.0
-    return np.polynomial.polynomial.polyval(rho(t), c)
+    return np.polynomial.polynomial.polyval(r, c)
 
 
 def rho(t: np.ndarray) -> np.ndarray:

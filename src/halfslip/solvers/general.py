@@ -2,36 +2,41 @@
 
 Formulation (docs/general_solver.md has the derivation and the error study).
 The memory is the locked-in relative strain E(x) = Delta-eps (T1) of every
-material point in contact, kept at the points of a fixed material lattice (plus
-the two contact edges). A stuck point keeps its E; a slipping point takes the
-current Delta-eps; a point leaving contact forgets; a point entering during a
-step gets the strain it has at the instant its gap closes (physics.md, first
-trap), from the memory rule (M1) in strain form (``_general_path``).
+material point in contact, kept at material points (``_general_points``): a
+fixed lattice, the contact edges, the breakpoints of h', and clusters where E
+has a square-root singularity. A stuck point keeps its E; a slipping point
+takes the current Delta-eps; a point leaving contact forgets; a point entering
+during a step gets the strain it has at the instant its gap closes (physics.md,
+first trap), from the memory rule (M1) in strain form (``_general_path``).
+The shear traction is never stored: on the stick zone it is the bounded
+solution of the Cauchy singular integral equation whose right-hand side is E
+(T1), and +-f p in the slip zones (``_general_zones``).
 
 A step along the straight line from ``state.loads`` to ``loads1``:
 
 1. normal problem at the end (skipped when P and M are unchanged);
-2. arrival strains of the lattice points entering the contact;
-3. the no-slip test (S1) at the start and the end contact, with the half-width
-   d and the moment increment dM0 = dM - dP x0 about the contact centre:
-   abs(dQ -+ (pi/4) d dsigma) < f (dP -+ 2 dM0 / d) at both edges. While it
-   holds the whole contact sticks: q is the bounded solution of the stick
-   equation over the contact (``_general_zones``), with the arrivals' strain
-   closing equilibrium (the M1 increments, T2 sigma term included);
-4. otherwise slip zones at one edge or both, of either sign, with the stick
-   edges found from consistency and equilibrium, checked against Coulomb
-   (abs(q) <= f p on the stick zone) and the slip direction (q . dslip >= 0);
+2. arrival strains of the points entering the contact;
+3. the no-slip test (S1) at the start and at the end contact, with the
+   half-width d and the moment increment dM0 = dM - dP x0 about the contact
+   centre: abs(dQ -+ (pi/4) d dsigma) < f (dP -+ 2 dM0 / d) at both edges.
+   While it holds the whole contact sticks (no slip solve): the arrivals carry
+   the fully stuck increments of M1 with the sigma term of T2, and q follows
+   from E;
+4. otherwise slip zones at one edge or both, of either sign, growing or
+   receding: the stick edges satisfy consistency and equilibrium, and the
+   configuration is checked against Coulomb (abs(q) <= f p on the stick zone)
+   and the slip direction (q . dslip >= 0);
 5. E takes Delta-eps in the slip zones; slip, dissipation and rigid shift are
    updated.
 
 Gross sliding (abs(Q) >= f P: q = sign(Q) f p) and separation (P <= 0: all
 memory lost) are states the march passes through.
 
-Rigid shift: relative tangential displacement of surface point x is
-g(x) = delta + (A/pi) int q(xi) ln(abs(x - xi) / l) dxi + A sigma x / 4, with the
+Rigid shift: the relative tangential displacement of surface point x is
+g(x) = delta + (A/pi) int q(xi) ln(abs(x - xi) / l) dxi + A sigma x / 4 with the
 datum l = ``datum`` = profile length scale (as the exact method); delta follows
-from a point stuck through the step. In gross sliding the point at the middle
-of the contact keeps its g (delta is indeterminate under force control).
+from a point stuck through the step. In gross sliding the middle of the
+old/new contact overlap keeps its g (delta is indeterminate under force control).
 """
 from __future__ import annotations
 
@@ -42,27 +47,39 @@ import numpy as np
 
 from ..geometry import NormalProblem, NormalSolution, RoundedPunch, TabulatedProfile
 from ..state import ContactState, Loads, Regime, StepReport
+from . import _general_points as pts
 from . import _general_sie as sie
 from ._general_path import EdgePath, arrival_strains, outside_strain
+from ._general_points import BREAK, CLUSTER, EDGE, LATTICE, SINGULAR_LEFT, SINGULAR_RIGHT
 from ._general_zones import Config, Shear, Solution, StepProblem
 
 #: Default resolution: lattice points per contact width (between nodes and 2 nodes).
 DEFAULT_NODES = 512
-#: Accepted Coulomb excess on the stick zone, relative to f max p.
-COULOMB_TOL = 1e-6
+#: Coulomb excess on the stick zone, relative to f max p, above which a step that passed the
+#: no-slip test (S1) is re-solved with slip zones (S1 is exact for small steps; this catches
+#: finite-step effects, not discretisation noise).
+STICK_COULOMB_TOL = 1e-3
+#: Accepted Coulomb excess of a slip-zone configuration, relative to f max p.
+COULOMB_TOL = 1e-4
 #: Accepted reversed slip in a slip zone, relative to the largest slip of the step.
-DIRECTION_TOL = 1e-6
-#: U-series terms for the log potential of q (the rigid shift).
-FIT_TERMS = 256
-#: Material points of the cluster laid on the slip side of each stick edge, at b +- h (k/K)^2.
-CLUSTER_POINTS = 16
-#: Virtual points for the square-root cell next to a stick edge.
-VIRTUAL_POINTS = 8
+DIRECTION_TOL = 0.05
+#: Points at which a configuration is checked against Coulomb's law.
+CHECK_POINTS = 64
+#: A step whose slip solve finds no configuration that passes the checks is split in two
+#: halves (the path stays straight), at most this many times over; so is a slipping step
+#: over which a stuck edge advances by more than MAX_STRIP of the contact width (the strain
+#: locked in by its arrivals depends on how the force was shared during the step, which
+#: the gauge force F models to first order only).
+MAX_SPLITS = 3
+MAX_STRIP = 0.02
+#: U-series terms of f chi p for its log potential (the rigid shift).
+FIT_TERMS = 128
 #: Lattice spacings from a stick edge within which slip-zone strains use the closed form.
 NEAR_SPACINGS = 4.0
-
-# kinds of material point
-LATTICE, EDGE, BREAK, CLUSTER, SINGULAR_LEFT, SINGULAR_RIGHT = range(6)
+#: Points next to a stick edge whose strain changes by less than this fraction of max abs(E)
+#: are counted as stuck: they were locked at the slip limit with the same sign, and the
+#: equations cannot place the edge within such a band (the exact method keeps them stuck).
+TRIM_TOL = 1e-3
 
 
 @dataclass(frozen=True)
@@ -76,37 +93,37 @@ class GeneralMemory:
     origin, spacing : float
         The material lattice x_j = origin + j spacing (NaN before first contact).
     X : ndarray, shape (n,)
-        Material points in contact, increasing: the two contact edges (first and
-        last), lattice points, breakpoints of h', and clusters at stick edges.
+        Material points in contact, increasing; the contact edges first and last.
+    kind : ndarray of int8, shape (n,)
+        Kind of each point (``_general_points``).
     E : ndarray, shape (n,)
         Locked-in relative strain Delta-eps at X.
+    kappa : ndarray, shape (n,)
+        Square-root coefficient of E at singular points (0 elsewhere).
     G : ndarray, shape (n,)
         Slip accumulated at X since the point entered contact [m].
-    kind : ndarray of int8, shape (n,)
-        LATTICE, EDGE, BREAK, CLUSTER, or SINGULAR_LEFT/RIGHT: a stick edge at
-        which a slip zone on that side ended; E rises like sqrt(distance) into
-        the old slip zone, and the cell on that side is interpolated so.
     shear : Shear or None
         Representation of q(x).
+    chi_fit : ndarray, shape (FIT_TERMS,), or None
+        U-series of f chi p on the contact (with shear.coef, the log potential of q).
     edge_ratio : tuple of float
         q / p at the left and right contact edges.
-    q_fit : ndarray, shape (FIT_TERMS,), or None
-        U-series of q on the contact (its log potential gives the shift).
     residual : float
-        Consistency residual gamma_0 / (f p_max) of the last full-stick solve:
-        the discretisation error estimate (0 after a slip solve, which zeroes it).
+        Consistency residual gamma_0 / (f max p) of the last full-stick solve:
+        the discretisation error estimate (slip solves zero it by moving the edges).
     """
 
     normal: NormalSolution | None
     origin: float
     spacing: float
     X: np.ndarray
-    E: np.ndarray
-    G: np.ndarray
     kind: np.ndarray
+    E: np.ndarray
+    kappa: np.ndarray
+    G: np.ndarray
     shear: Shear | None
+    chi_fit: np.ndarray | None
     edge_ratio: tuple
-    q_fit: np.ndarray | None
     residual: float = 0.0
 
 
@@ -131,6 +148,33 @@ class _Edges:
         return all(abs(u) < friction * v for u, v in zip(self.u, self.v))
 
 
+@dataclass(frozen=True)
+class _Data:
+    """Material points of the new contact and what they carry into the step (shapes (n,))."""
+
+    origin: float
+    spacing: float
+    X: np.ndarray
+    kind: np.ndarray
+    E: np.ndarray  # strain at the start (arrivals: on arrival, gauge force 0)
+    kappa: np.ndarray  # its square-root coefficients
+    gauge: np.ndarray  # d E / d F at arrivals
+    kappa_gauge: np.ndarray  # and of the gauge
+    side: np.ndarray  # int8: -1 / +1 arrived at the left / right edge, 0 was in contact
+    G: np.ndarray  # slip so far
+    p0: np.ndarray  # pressure at the start
+    first: float  # where contact formed (NaN unless the step starts separated)
+
+    def stuck_arrivals(self, cfg: Config) -> np.ndarray:
+        """Points that arrived at an edge that sticks in ``cfg`` (the gauge force acts on them)."""
+        return ((self.side < 0) & (cfg.left == 0)) | ((self.side > 0) & (cfg.right == 0))
+
+    def start(self, sol: Solution) -> tuple[np.ndarray, np.ndarray]:
+        """Strain at the start of the step and its square-root coefficients, for a solution."""
+        on = self.stuck_arrivals(sol.config)
+        return self.E + sol.gauge * self.gauge * on, self.kappa + sol.gauge * self.kappa_gauge * on
+
+
 class GeneralSolver:
     """Tangential solver for any profile and all four loads varying.
 
@@ -141,9 +185,8 @@ class GeneralSolver:
         Coulomb coefficient f.
     nodes : int
         Resolution: the material lattice keeps between ``nodes`` and
-        2 ``nodes`` points across the contact, and q on the stick zone is a
-        ``nodes``-term Chebyshev series (used inside the solver; output q is
-        the exact inversion of the interpolated strain).
+        2 ``nodes`` points across the contact, and the stick-zone solution
+        is carried as a ``nodes``-term Chebyshev series where a series is used.
     stations : array_like, shape (n_stations,), optional
         Surface points whose accumulated slip :meth:`slip` returns.
 
@@ -164,8 +207,8 @@ class GeneralSolver:
         if not self.f > 0.0:
             raise ValueError(f"friction must be positive, got {friction!r}")
         self.nodes = int(nodes)
-        if self.nodes < 16:
-            raise ValueError(f"nodes must be at least 16, got {nodes!r}")
+        if self.nodes < 8:
+            raise ValueError(f"nodes must be at least 8, got {nodes!r}")
         self.A = problem.compliance
         self.datum = problem.profile.length_scale
         self.stations = None if stations is None else np.asarray(stations, dtype=float)
@@ -179,25 +222,60 @@ class GeneralSolver:
     def initial_state(self, t0: float = 0.0) -> ContactState:
         """Separated, unloaded, no memory."""
         nan = math.nan
-        empty = _frozen(np.zeros(0))
-        mem = GeneralMemory(None, nan, nan, empty, empty, empty, _frozen(np.zeros(0, np.int8)), None, (0.0, 0.0),
-                            None)
+        mem = _empty_memory(nan, nan)
         return ContactState(float(t0), Loads(0.0, 0.0, 0.0, 0.0), nan, nan, nan, nan, 0.0, 0.0, mem)
 
     # ------------------------------------------------------------------
     def step(self, state: ContactState, t1: float, loads1: Loads) -> tuple[ContactState, StepReport]:
-        """Advance ``state`` to time ``t1`` and ``loads1`` along the straight line in (P, Q, M, sigma)."""
-        loads1 = Loads(*(float(v) for v in loads1))
+        """Advance ``state`` to time ``t1`` and ``loads1`` along the straight line in (P, Q, M, sigma).
+
+        A step that no slip-zone configuration solves (typically a long step
+        over which an edge first recedes and then advances, against the
+        monotone zones assumed within a step), or in which a stuck edge
+        advances more than MAX_STRIP of the width while the other slips, is
+        split in halves along the same line, up to MAX_SPLITS times.
+
+        Returns
+        -------
+        state : ContactState
+            The new state (``state`` is not modified).
+        report : StepReport
+        """
+        self.counters["steps"] += 1
+        return self._step(state, float(t1), Loads(*(float(v) for v in loads1)), MAX_SPLITS)
+
+    def _step(self, state: ContactState, t1: float, loads1: Loads, splits: int) -> tuple[ContactState, StepReport]:
+        """One step, split in halves while ``_single`` asks for it and ``splits`` remain."""
+        new, report, split = self._single(state, t1, loads1)
+        if not split or splits == 0:
+            return new, report
+        loads0 = state.loads
+        mid = Loads(*(0.5 * (a + b) for a, b in zip(loads0, loads1)))
+        half, first = self._step(state, 0.5 * (state.t + t1), mid, splits - 1)
+        new, second = self._step(half, t1, loads1, splits - 1)
+        message = "; ".join(m for m in (first.message, second.message) if m)
+        return new, StepReport(second.regime, first.slipped or second.slipped,
+                               first.normal_solved or second.normal_solved, message)
+
+    def _single(self, state: ContactState, t1: float, loads1: Loads):
+        """One straight step, without splitting.
+
+        Returns
+        -------
+        state : ContactState
+        report : StepReport
+        split : bool
+            Whether the step should rather be taken in two halves.
+        """
         loads0 = state.loads
         mem = state.memory
-        self.counters["steps"] += 1
         if loads1 == loads0:
             regime = Regime.SEPARATED if mem.normal is None else Regime.STICK
             new = ContactState(float(t1), loads0, state.contact_left, state.contact_right, state.contact_left,
                                state.contact_right, state.shift, state.dissipation, mem)
-            return new, StepReport(regime, False, False, "")
+            return new, StepReport(regime, False, False, ""), False
         if not loads1.P > 0.0:
-            return self._separate(state, t1, loads1)
+            return (*self._separate(state, t1, loads1), False)
         normal_changed = mem.normal is None or (loads1.P, loads1.M) != (loads0.P, loads0.M)
         if normal_changed:
             N1 = self.problem.solve(loads1.P, loads1.M)
@@ -206,18 +284,24 @@ class GeneralSolver:
             N1 = mem.normal
         data = self._data(mem, N1, loads0, loads1)
         if abs(loads1.Q) >= self.f * loads1.P:
-            return self._gross(state, t1, loads1, N1, data, normal_changed)
+            return (*self._gross(state, t1, loads1, N1, data, normal_changed), False)
         f = self.f
         edges1 = _Edges.of(N1, loads0, loads1)
         sticks = edges1.sticks(f) and (mem.normal is None or _Edges.of(mem.normal, loads0, loads1).sticks(f))
-        Xa, Ea, ga = _augment(data.X, data.kind, data.E, data.gauge)
-        problem = StepProblem(N1, self._slope, self._breaks, Xa, Ea, ga, self.A, f, loads1.sigma, loads1.Q,
-                              self.nodes)
+        left, right = data.side < 0, data.side > 0
+        Xa, (Ea, g_left, g_right) = pts.augment(data.X, data.kind, data.spacing, [
+            (data.E, data.kappa), (data.gauge * left, data.kappa_gauge * left),
+            (data.gauge * right, data.kappa_gauge * right)])
+        # the previous fix-up is the persistent residual of the strain-based equilibrium,
+        # except after opposite-sign zones, where it is mostly the sampling of their ramp
+        bias = mem.shear.fixup if mem.shear is not None and not mem.shear.config.opposite else 0.0
+        problem = StepProblem(N1, self._slope, self._breaks, Xa, Ea, (g_left, g_right), self.A, f, loads1.sigma,
+                              loads1.Q, self.nodes, bias, data.X[data.kind >= SINGULAR_LEFT])
         chosen = None
         if sticks:
             sol = problem.solve(Config(0, 0))
             shear = problem.shear(sol)
-            if self._coulomb(problem, shear) <= COULOMB_TOL:
+            if self._coulomb(problem, shear) <= STICK_COULOMB_TOL:
                 chosen = (sol, shear)
         slipped = chosen is None
         message = ""
@@ -226,11 +310,18 @@ class GeneralSolver:
             chosen, message = self._slip_solve(problem, data, mem, N1, edges1)
         sol, shear = chosen
         self.counters["evaluations"] += problem.evaluations
-        return self._finish(state, t1, loads1, N1, data, problem, sol, shear, slipped, normal_changed, message,
-                            edges1)
+        split = bool(message)
+        if slipped and mem.normal is not None:
+            W = N1.right - N1.left
+            strips = (mem.normal.left - N1.left, N1.right - mem.normal.right)
+            split |= any(s == 0 and strip > MAX_STRIP * W for s, strip in zip((sol.config.left, sol.config.right),
+                                                                                  strips))
+        new, report = self._finish(state, t1, loads1, N1, data, problem, sol, shear, slipped, normal_changed,
+                                   message, edges1)
+        return new, report, split
 
     # -- the material points of the new contact ----------------------------
-    def _data(self, mem: GeneralMemory, N1: NormalSolution, loads0: Loads, loads1: Loads) -> "_Data":
+    def _data(self, mem: GeneralMemory, N1: NormalSolution, loads0: Loads, loads1: Loads) -> _Data:
         """Points of the new contact with their start strain, gauge and slip (arrivals included)."""
         L1, R1 = N1.left, N1.right
         W = R1 - L1
@@ -246,24 +337,36 @@ class GeneralSolver:
         lattice = origin + h * np.arange(j_lo, j_hi + 1)
         breaks = self._breaks[(self._breaks > L1) & (self._breaks < R1)]
         carried = (mem.kind >= CLUSTER) & (mem.X > L1) & (mem.X < R1)
-        X = np.concatenate(([L1, R1], lattice, breaks, mem.X[carried]))
-        kind = np.concatenate(([EDGE, EDGE], np.full(lattice.size, LATTICE), np.full(breaks.size, BREAK),
-                               mem.kind[carried])).astype(np.int8)
-        X, kind = _merge(X, kind, 1e-9 * h)
+        parts = [([L1, R1], EDGE), (lattice, LATTICE), (breaks, BREAK)]
+        N0 = mem.normal
+        if N0 is not None:
+            # an old edge the contact grew past: E may rise like a square root beyond it
+            # (a strip narrower than two cluster points cannot fix kappa: the old edge is kept plain)
+            offsets = pts.cluster_offsets(h)
+            if L1 < N0.left:
+                wide = N0.left - L1 > offsets[1]
+                parts += [([N0.left], SINGULAR_LEFT if wide else CLUSTER),
+                          (N0.left - offsets[N0.left - offsets > L1], CLUSTER)]
+            if R1 > N0.right:
+                wide = R1 - N0.right > offsets[1]
+                parts += [([N0.right], SINGULAR_RIGHT if wide else CLUSTER),
+                          (N0.right + offsets[N0.right + offsets < R1], CLUSTER)]
+        new_kappa = np.zeros(sum(len(x) for x, _ in parts))
+        X = np.concatenate([np.asarray(x, dtype=float) for x, _ in parts] + [mem.X[carried]])
+        kind = np.concatenate([np.full(len(x), k) for x, k in parts] + [mem.kind[carried]]).astype(np.int8)
+        kappa = np.concatenate([new_kappa, mem.kappa[carried]])
+        X, kind, (kappa,) = pts.merge(X, kind, 1e-9 * h, kappa)
         n = X.size
         E = np.zeros(n)
         gauge = np.zeros(n)
+        side_of = np.zeros(n, dtype=np.int8)
         G = np.zeros(n)
         p0 = np.zeros(n)
-        N0 = mem.normal
         if N0 is not None:
             old = (X >= N0.left) & (X <= N0.right)
-            if np.array_equal(X, mem.X):
-                E, G = mem.E.copy(), mem.G.copy()
-            else:
-                Xa0, Ea0 = _augment(mem.X, mem.kind, mem.E)
-                E[old] = np.interp(X[old], Xa0, Ea0)
-                G[old] = np.interp(X[old], mem.X, mem.G)
+            Xa0, (Ea0,) = pts.augment(mem.X, mem.kind, mem.spacing, [(mem.E, mem.kappa)])
+            E[old] = np.interp(X[old], Xa0, Ea0)
+            G[old] = np.interp(X[old], mem.X, mem.G)
             p0 = N0.pressure(X)
         else:
             old = np.zeros(n, dtype=bool)
@@ -273,7 +376,6 @@ class GeneralSolver:
             path = EdgePath(self.problem, N0, N1, loads0, loads1)
             self.counters["normal_solves"] += path.solves
             if N0 is not None:
-                Xa0, Ea0 = _augment(mem.X, mem.kind, mem.E)
                 E[arriving] = outside_strain(Xa0, Ea0, X[arriving], 2 * self.nodes)
                 split = N0.center
             else:
@@ -287,10 +389,16 @@ class GeneralSolver:
                     inc, e = arrival_strains(path, X[mask], side, self.A)
                     E[mask] += inc
                     gauge[mask] = e
-        return _Data(origin, h, X, kind, E, gauge, G, p0, first)
+                    side_of[mask] = side
+        fresh = np.flatnonzero((kind >= SINGULAR_LEFT) & (kappa == 0.0) & ~np.isin(X, mem.X[carried]))
+        kappa_gauge = np.zeros(n)
+        if fresh.size:
+            kappa[fresh] = pts.fit_kappa(X, kind, h, E, fresh)
+            kappa_gauge[fresh] = pts.fit_kappa(X, kind, h, gauge, fresh)
+        return _Data(origin, h, X, kind, E, kappa, gauge, kappa_gauge, side_of, G, p0, first)
 
     # -- slip -------------------------------------------------------------
-    def _slip_solve(self, problem: StepProblem, data: "_Data", mem: GeneralMemory, N1: NormalSolution,
+    def _slip_solve(self, problem: StepProblem, data: _Data, mem: GeneralMemory, N1: NormalSolution,
                     edges1: _Edges):
         """Try slip configurations, most likely first; return ((sol, shear), message)."""
         f = self.f
@@ -318,69 +426,91 @@ class GeneralSolver:
             if cfg == Config(0, 0):
                 continue
             self.counters["configurations"] += 1
-            sol = problem.solve(cfg, guess)
-            if not sol.converged:
-                continue
-            shear = problem.shear(sol)
-            violation = self._violation(problem, data, sol, shear)
-            if violation <= 1.0:
-                return (sol, shear), ""
-            if violation < best_violation:
-                best, best_violation = (sol, shear), violation
+            for sol in problem.roots(cfg, guess, _limits(cfg, mem, N1)):
+                shear = problem.shear(sol)
+                violation = self._violation(problem, data, sol, shear)
+                if violation <= 1.0:
+                    return (sol, shear), ""
+                if violation < best_violation:
+                    best, best_violation = (sol, shear), violation
         if best is None:
             sol = problem.solve(Config(0, 0))
-            return (sol, problem.shear(sol)), "slip solve did not converge for any slip-zone configuration; " \
-                                              "full stick kept"
+            shear = problem.shear(sol)
+            return (sol, shear), ("slip solve: no slip-zone configuration converged; kept full stick "
+                                  f"(Coulomb excess {self._coulomb(problem, shear):.2g} of f max p)")
         return best, (
             "slip solve: no slip-zone configuration met the Coulomb and slip-direction checks; "
             f"kept the closest (violation {best_violation:.2g} x tolerance)"
         )
 
     def _coulomb(self, problem: StepProblem, shear: Shear) -> float:
-        """Largest excess of abs(q) over f p on the stick interval, relative to f max p."""
-        t = sie.chebyshev_nodes(self.nodes)
+        """Largest excess of abs(q) over f p on the stick interval, relative to f max p.
+
+        Checked at CHECK_POINTS Chebyshev points and at the square-root points of
+        E, with the exact inversion of the stick data (the series converges too
+        slowly next to square-root points).
+        """
+        t = sie.chebyshev_nodes(CHECK_POINTS)
         x = shear.center + shear.radius * t
+        sing = problem.singular  # and where E has structure: its square-root points
+        x = np.concatenate((x, sing[(sing > shear.stick_left) & (sing < shear.stick_right)]))
         p = problem.normal.pressure(x)
         q = shear.evaluate(x, p, self.f)
         return float(np.max(np.abs(q) - self.f * p)) / problem.p_scale
 
-    def _violation(self, problem, data, sol, shear) -> float:
+    def _violation(self, problem: StepProblem, data: _Data, sol: Solution, shear: Shear) -> float:
         """Coulomb excess and reversed slip, each relative to its tolerance (<= 1 passes)."""
         coulomb = self._coulomb(problem, shear)
-        E_start = data.E + sol.gauge * data.gauge
-        _, dg = self._slip_update(problem, shear, data.X, data.kind, E_start, data.spacing)
+        E_start, _ = data.start(sol)
+        _, dg, (b1, b2) = self._slip_update(problem, shear, data.X, E_start, data.spacing)
         reverse = 0.0
-        for sign, zone in ((sol.config.left, data.X < sol.stick_left), (sol.config.right, data.X > sol.stick_right)):
+        for sign, zone in ((sol.config.left, data.X < b1), (sol.config.right, data.X > b2)):
             if sign != 0 and np.any(zone):
                 reverse = max(reverse, float(np.max(-sign * dg[zone])))
         scale = float(np.max(np.abs(dg)))
         direction = reverse / scale if scale > 0.0 else 0.0
-        return max(coulomb / COULOMB_TOL, direction / DIRECTION_TOL)
+        return max(max(coulomb, 0.0) / COULOMB_TOL, direction / DIRECTION_TOL)
 
-    def _slip_update(self, problem, shear, X, kind, E_start, h):
-        """Strain at the end of the step and slip increment at points X (shape (n,) each).
+    def _slip_update(self, problem: StepProblem, shear: Shear, X: np.ndarray, E_start: np.ndarray, h: float):
+        """Strain at the end of the step, slip increment, and the stick edges, at points X.
 
         Stuck points keep E_start; points in a slip zone take the current
         Delta-eps, and their slip increment is the integral of the strain change
-        from the stick edge outward (trapezoid over X; the stick edge itself
-        does not slip).
+        from the stick edge outward (trapezoid over X; the stick edge does not
+        slip). Points next to the stick edge whose strain does not change
+        (TRIM_TOL) count as stuck, and the edge moves out to the first point
+        that slips.
+
+        Returns
+        -------
+        E_end, dg : ndarray, shape (n,)
+        edges : tuple of float
+            The stick edges (b1, b2).
         """
         E_end = E_start.copy()
         dg = np.zeros_like(X)
         cfg = shear.config
-        b1, b2 = shear.stick_left, shear.stick_right
-        Xa, Ea = _augment(X, kind, E_start)
-        for side, sign, zone in ((-1, cfg.left, X < b1), (1, cfg.right, X > b2)):
+        edges = [shear.stick_left, shear.stick_right]
+        tol = TRIM_TOL * float(np.max(np.abs(E_start)))
+        for k, (side, sign) in enumerate(((-1, cfg.left), (1, cfg.right))):
+            b = edges[k]
+            zone = (X < b) if side < 0 else (X > b)
             if sign == 0 or not np.any(zone):
                 continue
-            b = b1 if side < 0 else b2
             near = np.abs(X[zone] - b) <= NEAR_SPACINGS * h
             E_end[zone] = problem.strain(shear, X[zone], near)
-            order = np.flatnonzero(zone)[::-side]  # outward from b
+            order = np.flatnonzero(zone)[::side]  # outward from b
+            unchanged = np.abs(E_end[order] - E_start[order]) <= tol
+            trim = int(np.argmin(unchanged)) if not np.all(unchanged) else order.size
+            if trim:
+                E_end[order[:trim]] = E_start[order[:trim]]
+                b = X[order[trim - 1]]
+                edges[k] = b
+                order = order[trim:]
             xs = np.concatenate(([b], X[order]))
             diff = np.concatenate(([0.0], E_end[order] - E_start[order]))
             dg[order] = np.cumsum(0.5 * (diff[1:] + diff[:-1]) * np.diff(xs))
-        return E_end, dg
+        return E_end, dg, tuple(edges)
 
     # -- finishing a step ---------------------------------------------------
     def _finish(self, state, t1, loads1, N1, data, problem, sol, shear, slipped, normal_changed, message, edges1):
@@ -389,45 +519,49 @@ class GeneralSolver:
         cfg = sol.config
         L1, R1 = N1.left, N1.right
         W = R1 - L1
-        b1, b2 = sol.stick_left, sol.stick_right
+        E_start, kappa = data.start(sol)
+        X, kind, G0, p0 = data.X, data.kind, data.G, data.p0
+        _, _, (b1, b2) = self._slip_update(problem, shear, X, E_start, data.spacing)
         left_zone = cfg.left != 0 and b1 - L1 > 1e-9 * W
         right_zone = cfg.right != 0 and R1 - b2 > 1e-9 * W
         regime = Regime.PARTIAL_SLIP if (left_zone or right_zone) else Regime.STICK
         if regime == Regime.STICK:
             self.counters["stick_steps"] += 1
-        E_start = data.E + sol.gauge * data.gauge
-        X, kind, E_start, G0, p0 = data.X, data.kind, E_start, data.G, data.p0
         if regime == Regime.PARTIAL_SLIP:
-            X, kind, E_start, G0, p0 = self._clusters(data, E_start, b1 if left_zone else None,
-                                                      b2 if right_zone else None, N1)
-        E_end, dg = self._slip_update(problem, shear, X, kind, E_start, data.spacing)
+            X, kind, E_start, kappa, G0, p0 = self._clusters(data, E_start, kappa, b1 if left_zone else None,
+                                                             b2 if right_zone else None, N1)
+        E_end, dg, _ = self._slip_update(problem, shear, X, E_start, data.spacing)
+        fresh = np.flatnonzero((kind >= SINGULAR_LEFT) & np.isin(X, [b1, b2]))
+        if fresh.size:
+            kappa[fresh] = pts.fit_kappa(X, kind, data.spacing, E_end, fresh)
         p1 = N1.pressure(X)
         dissipation = _dissipation(X, dg, p0, p1, f)
+        X, kind, E_end, kappa, G1 = pts.prune(X, kind, data.spacing, E_end, kappa, G0 + dg)
         ratio = list(mem.edge_ratio)
         for i, s in enumerate((cfg.left, cfg.right)):
             if s != 0:
                 ratio[i] = s * f
             elif edges1.v[i] > 0.0:
                 ratio[i] = edges1.u[i] / edges1.v[i]
-        q_fit = self._fit(N1, shear)
+        chi_fit = self._chi_fit(N1, shear)
         stuck = _stuck_point(mem.normal, b1, b2, data.first)
-        shift = self._shift(state, mem, N1, q_fit, stuck, loads1)
+        shift = self._shift(state, N1, shear, chi_fit, stuck, loads1)
         residual = 0.0
         if cfg == Config(0, 0):
-            residual = abs(problem.gammas(cfg, L1, R1, sol.gauge)[0]) / problem.p_scale
-        new_mem = GeneralMemory(N1, data.origin, data.spacing, _frozen(X), _frozen(E_end), _frozen(G0 + dg),
-                                _frozen(kind), shear, tuple(ratio), q_fit, residual)
+            residual = abs(problem.gammas(cfg, L1, R1, 0.0)[0]) / problem.p_scale
+        new_mem = GeneralMemory(N1, data.origin, data.spacing, _frozen(X), _frozen(kind), _frozen(E_end),
+                                _frozen(kappa), _frozen(G1), shear, chi_fit, tuple(ratio), residual)
         stick = (L1, R1) if regime == Regime.STICK else (b1, b2)
         new = ContactState(float(t1), loads1, L1, R1, stick[0], stick[1], shift, state.dissipation + dissipation,
                            new_mem)
         return new, StepReport(regime, slipped, normal_changed, message)
 
-    def _clusters(self, data, E_start, b_left, b_right, N1):
+    def _clusters(self, data: _Data, E_start, kappa, b_left, b_right, N1):
         """Drop cluster points inside the slip zones and lay new ones at the stick edges.
 
-        A stick edge b becomes a SINGULAR point (E there is the stuck value) with
-        CLUSTER_POINTS points at b -+ h (k/K)^2 on its slip side, so that the
-        square-root rise of E into the slip zone survives when the zone stops.
+        A stick edge b becomes a SINGULAR point (its E is the stuck value) with
+        a cluster on its slip side; their strain at the end of the step is
+        computed in closed form, and kappa fitted from it, by the caller.
         """
         X, kind = data.X, data.kind
         drop = np.zeros(X.size, dtype=bool)
@@ -436,28 +570,27 @@ class GeneralSolver:
         if b_right is not None:
             drop |= (X > b_right) & (kind >= CLUSTER)
         h = data.spacing
-        offsets = h * (np.arange(1, CLUSTER_POINTS + 1) / CLUSTER_POINTS) ** 2
+        offsets = pts.cluster_offsets(h)
         new_x, new_kind = [], []
         for b, side, sing in ((b_left, -1, SINGULAR_LEFT), (b_right, 1, SINGULAR_RIGHT)):
             if b is None:
                 continue
-            pts = b + side * offsets
-            pts = pts[(pts > N1.left) & (pts < N1.right)]
-            new_x += [np.array([b]), pts]
-            new_kind += [np.array([sing]), np.full(pts.size, CLUSTER)]
+            at = b + side * offsets
+            at = at[(at > N1.left) & (at < N1.right)]
+            new_x += [np.array([b]), at]
+            new_kind += [np.array([sing]), np.full(at.size, CLUSTER)]
         keep = ~drop
-        Xa, Ea = _augment(X, kind, E_start)
+        Xa, (Ea,) = pts.augment(X, kind, h, [(E_start, kappa)])
         add_x = np.concatenate(new_x)
         add_kind = np.concatenate(new_kind).astype(np.int8)
         X2 = np.concatenate((X[keep], add_x))
         kind2 = np.concatenate((kind[keep], add_kind))
         E2 = np.concatenate((E_start[keep], np.interp(add_x, Xa, Ea)))
+        kappa2 = np.concatenate((kappa[keep], np.zeros(add_x.size)))
         G2 = np.concatenate((data.G[keep], np.interp(add_x, X, data.G)))
         p2 = np.concatenate((data.p0[keep], np.interp(add_x, X, data.p0)))
-        order = np.argsort(X2, kind="stable")
-        X2, kind2, E2, G2, p2 = X2[order], kind2[order], E2[order], G2[order], p2[order]
-        X2, kind2, (E2, G2, p2) = _merge(X2, kind2, 1e-9 * h, E2, G2, p2)
-        return X2, kind2, E2, G2, p2
+        X2, kind2, (E2, kappa2, G2, p2) = pts.merge(X2, kind2, 1e-9 * h, E2, kappa2, G2, p2)
+        return X2, kind2, E2, kappa2, G2, p2
 
     def _gross(self, state, t1, loads1, N1, data, normal_changed):
         """q = sign(Q) f p everywhere; g frozen at the middle of the old/new contact overlap."""
@@ -482,11 +615,11 @@ class GeneralSolver:
         keep = data.kind < CLUSTER
         p1 = N1.pressure(X)
         dissipation = _dissipation(X, dg, data.p0, p1, f)
-        q_fit = self._fit(N1, shear)
-        shift = self._shift(state, mem, N1, q_fit, stuck, loads1)
-        new_mem = GeneralMemory(N1, data.origin, data.spacing, _frozen(X[keep]), _frozen(E_end[keep]),
-                                _frozen((data.G + dg)[keep]), _frozen(data.kind[keep]), shear, (s * f, s * f),
-                                q_fit, 0.0)
+        chi_fit = self._chi_fit(N1, shear)
+        shift = self._shift(state, N1, shear, chi_fit, stuck, loads1)
+        new_mem = GeneralMemory(N1, data.origin, data.spacing, _frozen(X[keep]), _frozen(data.kind[keep]),
+                                _frozen(E_end[keep]), _frozen(np.zeros(int(np.sum(keep)))),
+                                _frozen((data.G + dg)[keep]), shear, chi_fit, (s * f, s * f), 0.0)
         message = ""
         if abs(loads1.Q) > f * loads1.P * (1.0 + 1e-12):
             message = "abs(Q) > f P: gross sliding, shear force carried limited to f P"
@@ -495,38 +628,51 @@ class GeneralSolver:
         return new, StepReport(Regime.GROSS_SLIDING, True, normal_changed, message)
 
     def _separate(self, state, t1, loads1):
+        """All memory lost; the shift keeps g at the old contact centre."""
         mem = state.memory
         shift = state.shift
-        if mem.normal is not None and mem.q_fit is not None:
-            shift += self._potential(mem.normal, mem.q_fit, mem.normal.center)
+        if mem.normal is not None:
+            shift += self._potential(mem.normal, mem.shear, mem.chi_fit, mem.normal.center)
         nan = math.nan
-        empty = _frozen(np.zeros(0))
-        new_mem = GeneralMemory(None, mem.origin, mem.spacing, empty, empty, empty, _frozen(np.zeros(0, np.int8)),
-                                None, (0.0, 0.0), None)
         message = f"separated (P <= 0): shear force Q = {loads1.Q:g} N/m not carried" if loads1.Q != 0.0 else ""
-        new = ContactState(float(t1), loads1, nan, nan, nan, nan, shift, state.dissipation, new_mem)
+        new = ContactState(float(t1), loads1, nan, nan, nan, nan, shift, state.dissipation,
+                           _empty_memory(mem.origin, mem.spacing))
         return new, StepReport(Regime.SEPARATED, False, mem.normal is not None, message)
 
     # -- rigid shift --------------------------------------------------------
-    def _fit(self, N: NormalSolution, shear: Shear) -> np.ndarray:
-        """U-series coefficients of q on the contact, shape (FIT_TERMS,)."""
+    def _chi_fit(self, N: NormalSolution, shear: Shear) -> np.ndarray:
+        """U-series coefficients of f chi p on the contact, shape (FIT_TERMS,)."""
         t = sie.u_nodes(FIT_TERMS)
         x = N.center + N.half_width * t
-        q = shear.evaluate(x, N.pressure(x), self.f)
-        return _frozen(sie.u_coefficients(q))
+        return _frozen(sie.u_coefficients(self.f * shear.chi_p(x, N.pressure(x))))
 
-    def _potential(self, N: NormalSolution, coef: np.ndarray, x: float) -> float:
-        """(A/pi) int q ln(abs(x - xi) / l) dxi from the U-series of q."""
-        r = N.half_width
-        t = (x - N.center) / r
-        return self.A * r * (0.5 * coef[0] * math.log(r / self.datum) + sie.log_potential(coef, t))
+    def _potential(self, N: NormalSolution, shear: Shear, chi_fit: np.ndarray, x: float) -> float:
+        """(A/pi) int q ln(abs(x - xi) / l) dxi at x.
 
-    def _shift(self, state, mem, N1, q_fit, stuck, loads1) -> float:
+        q = f chi p (its U-series on the contact) + q* (the series of the stick
+        interval) + the fix-up; each term's log potential is a series whose
+        terms fall off like 1/k^2, so truncation and aliasing barely matter.
+        """
+        l = self.datum
+
+        def series(a, centre, radius):
+            t = (x - centre) / radius
+            return self.A * radius * (0.5 * a[0] * math.log(radius / l) + sie.log_potential(a, t))
+
+        total = series(chi_fit, N.center, N.half_width)
+        if shear.radius > 0.0:
+            total += series(shear.coef[1:], shear.center, shear.radius)
+            if shear.fixup:
+                total += series(np.array([2.0 * shear.fixup / (math.pi * shear.radius)]), shear.center, shear.radius)
+        return total
+
+    def _shift(self, state, N1, shear, chi_fit, stuck, loads1) -> float:
         """delta such that g(stuck) is unchanged (g = delta + potential + A sigma x / 4)."""
+        mem = state.memory
         before = state.shift + 0.25 * self.A * state.loads.sigma * stuck
         if mem.normal is not None:
-            before += self._potential(mem.normal, mem.q_fit, stuck)
-        return before - self._potential(N1, q_fit, stuck) - 0.25 * self.A * loads1.sigma * stuck
+            before += self._potential(mem.normal, mem.shear, mem.chi_fit, stuck)
+        return before - self._potential(N1, shear, chi_fit, stuck) - 0.25 * self.A * loads1.sigma * stuck
 
     # -- output -----------------------------------------------------------
     def tractions(self, memory: GeneralMemory, x) -> tuple[np.ndarray, np.ndarray]:
@@ -535,7 +681,13 @@ class GeneralSolver:
         if memory.normal is None:
             return np.zeros(x.shape), np.zeros(x.shape)
         p = memory.normal.pressure(x)
-        return p, memory.shear.evaluate(x, p, self.f, exact=True)
+        return p, memory.shear.evaluate(x, p, self.f)
+
+    def shear_force(self, memory: GeneralMemory) -> float:
+        """The shear force the state carries, int q dx, from its representation [N/m]."""
+        if memory.normal is None:
+            return 0.0
+        return memory.shear.force(memory.normal, self.f, self._breaks)
 
     def slip(self, memory: GeneralMemory) -> np.ndarray:
         """Slip accumulated at the stations since each entered contact [m]; NaN outside contact."""
@@ -549,82 +701,41 @@ class GeneralSolver:
         return out
 
 
-@dataclass(frozen=True)
-class _Data:
-    """Material points of the new contact and what they carry into the step (shapes (n,))."""
-
-    origin: float
-    spacing: float
-    X: np.ndarray
-    kind: np.ndarray
-    E: np.ndarray  # strain at the start (arrivals: on arrival, gauge force 0)
-    gauge: np.ndarray  # d E / d F
-    G: np.ndarray  # slip so far
-    p0: np.ndarray  # pressure at the start
-    first: float  # where contact formed (NaN unless the step starts separated)
-
-
-def _augment(X: np.ndarray, kind: np.ndarray, E: np.ndarray, *others: np.ndarray):
-    """Insert virtual points in the cell on the slip side of each SINGULAR point.
-
-    In that cell E = E(b) + (E(x1) - E(b)) sqrt((x - b) / (x1 - b)); the
-    virtual points b + (x1 - b)(j/V)^2 carry it to the piecewise-linear
-    machinery. ``others`` are interpolated linearly.
-
-    Returns
-    -------
-    Xa, Ea, *others_a : ndarray, shape (m,) each
-    """
-    sing = np.flatnonzero(kind >= SINGULAR_LEFT)
-    if sing.size == 0:
-        return (X, E, *others)
-    frac = np.arange(1, VIRTUAL_POINTS) / VIRTUAL_POINTS
-    xs, es = [X], [E]
-    for i in sing:
-        j = i - 1 if kind[i] == SINGULAR_LEFT else i + 1
-        if j < 0 or j >= X.size:
-            continue
-        xs.append(X[i] + (X[j] - X[i]) * frac**2)
-        es.append(E[i] + (E[j] - E[i]) * frac)
-    Xa = np.concatenate(xs)
-    Ea = np.concatenate(es)
-    order = np.argsort(Xa, kind="stable")
-    Xa, Ea = Xa[order], Ea[order]
-    return (Xa, Ea, *(np.interp(Xa, X, o) for o in others))
-
-
-def _merge(X, kind, tol, *values):
-    """Sort points and drop near-duplicates, keeping edges and then the highest kind."""
-    priority = np.where(kind == EDGE, 10, kind)
-    order = np.lexsort((-priority, X))
-    X, kind = X[order], kind[order]
-    values = [v[order] for v in values]
-    keep = np.ones(X.size, dtype=bool)
-    last = 0
-    for i in range(1, X.size):
-        if X[i] - X[last] <= tol:
-            # keep the higher priority of the two
-            if priority[order][i] > priority[order][last]:
-                keep[last] = False
-                last = i
-            else:
-                keep[i] = False
-        else:
-            last = i
-    # no point may sit beyond or on an edge except the edges themselves
-    edges = kind == EDGE
-    lo, hi = X[edges].min(), X[edges].max()
-    keep &= edges | ((X > lo + tol) & (X < hi - tol))
-    out = (X[keep], kind[keep])
-    if values:
-        return (*out, tuple(v[keep] for v in values))
-    return out
+def _empty_memory(origin: float, spacing: float) -> GeneralMemory:
+    empty = _frozen(np.zeros(0))
+    return GeneralMemory(None, origin, spacing, empty, _frozen(np.zeros(0, np.int8)), empty, empty, empty, None,
+                         None, (0.0, 0.0))
 
 
 def _dissipation(X, dg, p0, p1, f) -> float:
     """int f (p0 + p1)/2 abs(dg) dx over the points, trapezoid."""
     y = f * 0.5 * (p0 + p1) * np.abs(dg)
     return float(np.sum(0.5 * (y[1:] + y[:-1]) * np.diff(X)))
+
+
+def _limits(cfg: Config, mem: GeneralMemory, N1: NormalSolution) -> tuple[float, float]:
+    """Bounds (lo, hi) of the stick edges of a slip configuration.
+
+    A slip zone at an edge that advanced must cover the points that arrived
+    there (their locked-in strain assumes they stuck): b stays inside the old
+    contact. A slip zone that continues with the sign it had cannot give
+    points back to the stick zone within a step (E there already equals the
+    slipping strain, so the equations do not see such a b): b stays at or
+    beyond the old stick edge.
+    """
+    lo, hi = N1.left, N1.right
+    N0, old = mem.normal, mem.shear
+    if N0 is None:
+        return lo, hi
+    if cfg.left:
+        lo = max(lo, N0.left)
+        if old is not None and old.config.left == cfg.left and old.radius > 0.0:
+            lo = max(lo, old.stick_left)
+    if cfg.right:
+        hi = min(hi, N0.right)
+        if old is not None and old.config.right == cfg.right and old.radius > 0.0:
+            hi = min(hi, old.stick_right)
+    return lo, hi
 
 
 def _stuck_point(N0: NormalSolution | None, b1: float, b2: float, first: float) -> float:
