@@ -461,8 +461,19 @@ class _Builder:
         self.index = 0
         self.segments: list[Segment] = []
 
-    def append(self, t: np.ndarray, values: Mapping[str, np.ndarray], **segment: Any) -> None:
-        """Append sampled points (not including the current one) as one segment."""
+    def append(self, t: np.ndarray, values: Mapping[str, np.ndarray], field: str | None = None,
+               **segment: Any) -> None:
+        """Append sampled points (not including the current one) as one segment.
+
+        Times that overflow or that rounding makes equal (a duration far below
+        the current time's resolution) are refused, naming ``field``.
+        """
+        if not (np.all(np.isfinite(t)) and t[0] > self.t_now and np.all(np.diff(t) > 0)):
+            raise HalfslipInputError(
+                f"the segment's times, from t = {self.t_now:g} s, do not increase strictly in floating point "
+                "(a duration or period too large, or too small for the current time)",
+                field=field,
+            )
         self.times.append(t)
         for name in LOADS:
             samples = np.broadcast_to(values.get(name, self.current[name]), t.shape).astype(float)
@@ -500,7 +511,9 @@ class _Builder:
         self.reserve(steps, join(field, "steps"))
         fraction = np.arange(1, steps + 1) / steps
         values = {name: self.current[name] * (1.0 - fraction) + end * fraction for name, end in ends.items()}
-        self.append(self.t_now + duration * fraction, values, kind="ramp", line=line)
+        with np.errstate(over="ignore"):
+            times = self.t_now + duration * fraction
+        self.append(times, values, join(field, "duration"), kind="ramp", line=line)
 
     def hold(self, body: Any, field: str, line: int | None) -> None:
         """Add a hold segment from its spec."""
@@ -509,7 +522,9 @@ class _Builder:
         steps = check_count(body.get("steps", 1), join(field, "steps"))
         self.reserve(steps, join(field, "steps"))
         fraction = np.arange(1, steps + 1) / steps
-        self.append(self.t_now + duration * fraction, {}, kind="hold", line=line)
+        with np.errstate(over="ignore"):
+            times = self.t_now + duration * fraction
+        self.append(times, {}, join(field, "duration"), kind="hold", line=line)
 
     def cycles(self, body: Any, field: str, line: int | None) -> None:
         """Add a cycles segment from its spec."""
@@ -530,9 +545,12 @@ class _Builder:
         k = np.arange(1, count * per_cycle + 1)
         tau = (k % per_cycle) / per_cycle  # bit-identical samples in every cycle
         values = {name: harmonic.value(tau) for name, harmonic in harmonics.items()}
+        with np.errstate(over="ignore"):  # overflowing times are refused by append
+            times = self.t_now + k * (period / per_cycle)
         self.append(
-            self.t_now + k * (period / per_cycle),
+            times,
             values,
+            join(field, "period"),
             kind="cycles",
             period=period,
             count=count,
@@ -568,6 +586,7 @@ class _Builder:
         self.append(
             self.t_now + t[rows],
             {name: values[rows] for name, values in table.columns.items()},
+            field,
             kind=kind,
             source=table.file,
             line=line,
