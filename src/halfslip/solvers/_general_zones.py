@@ -28,9 +28,12 @@ exactly; (*) is solved by Newton's method to rounding.
 When one edge sticks and advances, the strain its newly arrived points lock in
 depends on how the shear force was shared during the step; it is carried as
 E_arr + F e(x) (``_general_path.arrival_strains``), and the extra force F is
-the second unknown in place of the missing stick edge. When all sticks, F
-alone closes the equilibrium and gamma_0 is the discretisation residual
-(reported as the error estimate).
+the second unknown in place of the missing stick edge. When all sticks the
+arrival strains are exact (M1): F = 0, gamma_0 is the discretisation residual
+(reported as the error estimate) and the force the strain-based solution
+misses is carried as a fix-up force (see :class:`Shear`). For opposite signs
+the ramp term is not piecewise linear: its two moments are single integrals
+over [L, b1] and the Jacobian is taken by differences.
 """
 from __future__ import annotations
 
@@ -228,13 +231,19 @@ class StepProblem:
         self.width = self.R - self.L
         self.p_scale = self.f * max(float(np.max(normal.pressure(X))), 1e-300)
         self.evaluations = 0
+        self._last = None
 
     # -- the equations ------------------------------------------------------
     def _moments(self, b1: float, b2: float):
         """gamma_0, gamma_1 of [E, gauge left, gauge right, h' + alpha, 1] on [b1, b2], shape (2, 5),
-        and their derivatives with respect to (b1, b2), shape (2, 2, 5)."""
+        and their derivatives with respect to (b1, b2), shape (2, 2, 5) (the last interval is cached:
+        the residuals are affine in the gauge force F and are asked for several F in a row)."""
+        if self._last is not None and self._last[0] == (b1, b2):
+            return self._last[1]
         self.evaluations += 1
-        return sie.linear_moments(self._Xa, self._Ya, b1, b2, derivatives=True)
+        out = sie.linear_moments(self._Xa, self._Ya, b1, b2, derivatives=True)
+        self._last = ((b1, b2), out)
+        return out
 
     def _ramp_moments(self, b1: float, b2: float) -> tuple[np.ndarray, float]:
         """(gamma_0, gamma_1) of K = (1/pi) PV int k / (x - xi) on [b1, b2], and int k.
@@ -386,8 +395,7 @@ class StepProblem:
         starts = []
         if guess is not None and L <= guess[0] < guess[1] <= R:
             starts.append(guess)
-        starts += [(L + 1e-3 * W, R - 1e-3 * W), (L + 0.05 * W, R - 0.05 * W), (L + 0.25 * W, R - 0.25 * W),
-                   (L + 0.45 * W, R - 0.45 * W)]
+        starts += [(L + u * W, R - u * W) for u in (1e-3, 1e-5, 0.05, 0.25, 0.45)]
         found = []
         for start in starts:
             sol = self._newton(cfg, start)

@@ -60,7 +60,7 @@ DEFAULT_NODES = 512
 #: finite-step effects, not discretisation noise).
 STICK_COULOMB_TOL = 1e-3
 #: Accepted Coulomb excess of a slip-zone configuration, relative to f max p.
-COULOMB_TOL = 1e-4
+COULOMB_TOL = 1e-3
 #: Accepted reversed slip in a slip zone, relative to the largest slip of the step.
 DIRECTION_TOL = 0.05
 #: Points at which a configuration is checked against Coulomb's law.
