@@ -83,3 +83,17 @@ def test_textual_mutations_fail_cleanly(name, data):
         else:
             text = text[:i] + ch + text[i + 1:]
     assert_clean(text, EXAMPLES)
+
+
+def test_a_key_with_a_line_break_still_gives_one_line():
+    """Found by the structural fuzzer: a mapping key '\\n' was echoed into the message."""
+    tree = yaml.safe_load(TEXTS["hertz_pad.yaml"])
+    tree["material"] = {"\n": 0}
+    text = yaml.safe_dump(tree)
+    assert_clean(text, EXAMPLES)
+    try:
+        hs.parse_scene(text, path=EXAMPLES / "mutant.yaml", base_dir=EXAMPLES)
+    except HalfslipInputError as error:
+        assert "\\n" in str(error)  # shown escaped, on the one line
+    else:
+        raise AssertionError("a material with an unknown key must be refused")

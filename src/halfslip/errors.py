@@ -57,7 +57,8 @@ class HalfslipInputError(ValueError):
     def __str__(self) -> str:
         location = ":".join(str(part) for part in (self.file, self.line) if part is not None)
         parts = [part for part in (location, self.field, self.message) if part]
-        return ": ".join(parts)
+        # one line whatever the input: control characters from keys or values are escaped
+        return "".join(c if c.isprintable() else repr(c)[1:-1] for c in ": ".join(parts))
 
     def located(self, file: str | None, line: int | None) -> HalfslipInputError:
         """Return a copy with `file` and `line` filled in where still unknown."""
