@@ -15,7 +15,7 @@ import numpy as np
 import xarray as xr
 
 from .geometry import NormalProblem
-from .state import ContactState, Loads, Regime
+from .state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime
 
 METHODS = ("auto", "exact", "general")
 FIELDS = ("p", "q", "slip")
@@ -99,9 +99,14 @@ def build_method(scene, name: str, problem: NormalProblem, stations: np.ndarray 
         from .solvers.exact import ExactMemory
 
         return ExactMemory(problem, scene.friction, P_max, stations=stations)
-    from .solvers import general  # noqa: F401  (built in a later issue)
+    from .solvers.general import GeneralSolver
 
-    return general.GeneralSolver(problem, scene.friction, scene.solver.nodes, stations=stations)
+    return GeneralSolver(problem, scene.friction, scene.solver.nodes, stations=stations)
+
+
+def _dtype(name: str):
+    """Storage type of a per-step column: the regime code is int8, the rest float."""
+    return np.int8 if name == "regime" else float
 
 
 class _Records:
@@ -122,7 +127,7 @@ class _Records:
     def _flush(self):
         if self.buffer["t"]:
             for k in self.names:
-                self.chunks[k].append(np.asarray(self.buffer[k], np.int8 if k == "regime" else float))
+                self.chunks[k].append(np.asarray(self.buffer[k], _dtype(k)))
                 self.buffer[k] = []
 
     def add(self, state: ContactState, regime: Regime):
@@ -142,7 +147,7 @@ class _Records:
         """Append the masked entries of per-step arrays (keys as ``names``)."""
         self._flush()
         for k in self.names:
-            self.chunks[k].append(np.asarray(steps[k], np.int8 if k == "regime" else float)[mask])
+            self.chunks[k].append(np.asarray(steps[k], _dtype(k))[mask])
 
     def add_fields(self, values: dict):
         for k, v in values.items():
@@ -151,13 +156,12 @@ class _Records:
     def column(self, name: str) -> np.ndarray:
         self._flush()
         parts = self.chunks[name]
-        dtype = np.int8 if name == "regime" else float
-        return np.concatenate(parts).astype(dtype, copy=False) if parts else np.zeros(0, dtype)
+        return np.concatenate(parts) if parts else np.zeros(0, _dtype(name))
 
     def load(self, ds: xr.Dataset, fields) -> None:
         """Start from the stored steps of an unfinished run."""
         for k in self.names:
-            self.chunks[k] = [np.asarray(ds[k].values, np.int8 if k == "regime" else float)]
+            self.chunks[k] = [np.asarray(ds[k].values, _dtype(k))]
             self.buffer[k] = []
         for k in fields:
             self.fields[k] = list(np.asarray(ds[k].values, float))
@@ -330,9 +334,8 @@ class _Run:
         c["normal_solves"] += int(np.count_nonzero(steps["normal_solved"]))
         gross = (regime == Regime.GROSS_SLIDING) & (np.abs(h.Q[idx]) > self.scene.friction * h.P[idx] * (1 + 1e-12))
         if gross.any():
-            message = "abs(Q) > f P: gross sliding, shear force carried limited to f P"
-            if message not in self.messages:
-                self.messages.append(message)
+            if GROSS_SLIDING_MESSAGE not in self.messages:
+                self.messages.append(GROSS_SLIDING_MESSAGE)
         mask = (idx % self.save.every == 0) | (idx == n)
         jump = self.skipper.check(stop, state) if self.skipper is not None else None
         if jump is not None:
@@ -530,8 +533,7 @@ def _dataset(rec: _Records, save: SaveAt) -> xr.Dataset:
     t = rec.column("t")
     data = {}
     for k in rec.names[1:]:
-        dtype = np.int8 if k == "regime" else float
-        data[k] = ("t", rec.column(k).astype(dtype, copy=False))
+        data[k] = ("t", rec.column(k))
     coords = {"t": t}
     if save.fields:
         coords["x"] = save.x

@@ -23,6 +23,10 @@ class Loads(NamedTuple):
     sigma: float
 
 
+GROSS_SLIDING_MESSAGE = "abs(Q) > f P: gross sliding, shear force carried limited to f P"
+"""What a step reports when the applied shear exceeds what friction can carry."""
+
+
 class Regime(enum.IntEnum):
     """What a step did; stored in the ``regime`` variable of the result."""
 

@@ -41,7 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..geometry import NormalProblem
-from ..state import ContactState, Loads, Regime, StepReport
+from ..state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime, StepReport
 from .levels import HertzLevels, LevelIntegrals, level_integrals
 
 _EPS = np.finfo(float).eps
@@ -362,7 +362,7 @@ class ExactMemory:
             stick = (float("nan"), float("nan"))
         message = ""
         if regime == Regime.GROSS_SLIDING and abs(loads1.Q) > self.f * loads1.P * (1 + 1e-12):
-            message = "abs(Q) > f P: gross sliding, shear force carried limited to f P"
+            message = GROSS_SLIDING_MESSAGE
         new_state = ContactState(
             t=float(t1),
             loads=loads1,

@@ -46,7 +46,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..geometry import NormalProblem, NormalSolution, RoundedPunch, TabulatedProfile
-from ..state import ContactState, Loads, Regime, StepReport
+from ..state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime, StepReport
 from . import _general_points as pts
 from . import _general_sie as sie
 from ._general_path import EdgePath, arrival_strains, outside_strain
@@ -622,7 +622,7 @@ class GeneralSolver:
                                 _frozen((data.G + dg)[keep]), shear, chi_fit, (s * f, s * f), 0.0)
         message = ""
         if abs(loads1.Q) > f * loads1.P * (1.0 + 1e-12):
-            message = "abs(Q) > f P: gross sliding, shear force carried limited to f P"
+            message = GROSS_SLIDING_MESSAGE
         new = ContactState(float(t1), loads1, L1, R1, math.nan, math.nan, shift, state.dissipation + dissipation,
                            new_mem)
         return new, StepReport(Regime.GROSS_SLIDING, True, normal_changed, message)
