@@ -309,6 +309,7 @@ class _Run:
             self.messages.append(report.message)
         jumped = False
         if self.skipper is not None:
+            self.skipper.observe(i, state)
             jump = self.skipper.check(i, state)
             if jump is not None:
                 i, state = jump
@@ -382,7 +383,10 @@ class _Run:
             "counters": dict(self.counters),
             "messages": list(self.messages),
             "elapsed": self.elapsed_before + elapsed,
-            "skipper": None if sk is None else {"previous": dict(sk.previous), "skipped": dict(sk.skipped)},
+            "skipper": None if sk is None else {"previous": dict(sk.previous), "skipped": dict(sk.skipped),
+                                                "traces": {k: {"previous": v["previous"],
+                                                               "current": np.asarray(v["current"], float).reshape(-1, 2)}
+                                                           for k, v in sk.traces.items()}},
         }
 
     def restore(self, ds: xr.Dataset, checkpoint: dict) -> None:
@@ -406,6 +410,8 @@ class _Run:
         if self.skipper is not None and checkpoint["skipper"] is not None:
             self.skipper.previous = dict(checkpoint["skipper"]["previous"])
             self.skipper.skipped = dict(checkpoint["skipper"]["skipped"])
+            self.skipper.traces = {k: {"previous": v["previous"], "current": [tuple(r) for r in v["current"]]}
+                                   for k, v in checkpoint["skipper"].get("traces", {}).items()}
 
 
 class CycleSkipper:
@@ -422,15 +428,47 @@ class CycleSkipper:
 
     def __init__(self, history, solver):
         self.same = getattr(solver, "same_state", None) or _same_memory
+        # a solver whose states agree only to a tolerance also asks that the cycle's stick
+        # edges repeat, step by step, to ``cycle_tolerance(state)`` [m]: a difference that
+        # the memory at the cycle's end hides (a slip zone that reached less far at a peak
+        # in a narrow strip) shows there
+        self.tolerance = getattr(solver, "cycle_tolerance", None)
         self.ends = {}  # step index of a cycle end -> (segment index, segment)
+        self.segment_of = []  # (start, stop, segment index) of the cycles segments
         self._sorted_ends = None
         for k, seg in enumerate(history.segments):
             if seg.kind == "cycles" and seg.count and seg.count > 2:
                 for j in range(1, seg.count):
                     self.ends[seg.start + j * seg.steps_per_cycle] = (k, seg)
+                self.segment_of.append((seg.start, seg.stop, k))
         self.t = history.t
         self.previous = {}
         self.skipped = {}
+        self.traces = {}  # segment index -> {"previous": edges of the last cycle, "current": this one's}
+
+    def observe(self, i: int, state: ContactState) -> None:
+        """Record the stick edges of step i (only when the solver states a cycle tolerance)."""
+        if self.tolerance is None:
+            return
+        for start, stop, k in self.segment_of:
+            if start < i <= stop:
+                trace = self.traces.setdefault(k, {"previous": None, "current": []})
+                trace["current"].append((state.stick_left, state.stick_right))
+                return
+
+    def _trajectory_repeats(self, k: int, state: ContactState) -> bool:
+        trace = self.traces.get(k)
+        if self.tolerance is None:
+            return True
+        if trace is None:
+            return False
+        prev, cur = trace["previous"], np.asarray(trace["current"], dtype=float).reshape(-1, 2)
+        trace["previous"], trace["current"] = cur, []
+        if prev is None or prev.shape != cur.shape:
+            return False
+        both_nan = np.isnan(prev) & np.isnan(cur)
+        diff = np.where(both_nan, 0.0, np.abs(prev - cur))
+        return bool(np.all(diff <= self.tolerance(state)))  # NaN against a number fails
 
     def next_end(self, i: int) -> int:
         """The first cycle end after step i (a large number when there is none)."""
@@ -453,7 +491,8 @@ class CycleSkipper:
         k, seg = self.ends[i]
         prev = self.previous.get(k)
         self.previous[k] = state
-        if prev is None or not self.same(prev, state):
+        repeats = self._trajectory_repeats(k, state)
+        if prev is None or not repeats or not self.same(prev, state):
             return None
         remaining = (seg.stop - i) // seg.steps_per_cycle
         per_cycle = state.dissipation - prev.dissipation
