@@ -23,7 +23,7 @@ LONG_SCENE = textwrap.dedent("""
     loads:
       - ramp: {to: {P: 1.0e5, Q: 3.0e4}, duration: 1.0, steps: 10}
       - cycles:
-          count: 12
+          count: 40
           period: 1.0
           steps_per_cycle: 400
           P: {amplitude: 3.0e4}

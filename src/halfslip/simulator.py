@@ -7,6 +7,7 @@ never writes output. What is stored is decided here by :class:`SaveAt`.
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from dataclasses import dataclass, field
 from typing import Callable
@@ -102,6 +103,23 @@ def build_method(scene, name: str, problem: NormalProblem, stations: np.ndarray 
     from .solvers.general import GeneralSolver
 
     return GeneralSolver(problem, scene.friction, scene.solver.nodes, stations=stations)
+
+
+#: A slip zone narrower than this many lattice spacings (contact width / nodes) leaves slip and
+#: dissipation under-resolved: on the dovetail example (widest zone 1.2 % of the contact) the
+#: dissipation per cycle is 4.5 % low at 512 nodes (6 spacings), 1.9 % at 1024, 0.7 % at 2048.
+RESOLVED_SPACINGS = 16.0
+
+
+def slip_zone_spacings(ds: xr.Dataset, nodes: int) -> float:
+    """Widest slip zone of the stored steps in lattice spacings W / nodes (0 when nothing slipped)."""
+    slipping = ds["regime"].values == int(Regime.PARTIAL_SLIP)
+    if not np.any(slipping):
+        return 0.0
+    L, R = ds["contact_left"].values[slipping], ds["contact_right"].values[slipping]
+    b1, b2 = ds["stick_left"].values[slipping], ds["stick_right"].values[slipping]
+    zones = np.maximum(b1 - L, R - b2) / ((R - L) / nodes)
+    return float(np.nanmax(zones)) if np.isfinite(zones).any() else 0.0
 
 
 def _dtype(name: str):
@@ -373,6 +391,14 @@ class _Run:
                 **{f"count_{k}": v for k, v in self.counters.items()},
             }
         )
+        if self.name == "general":
+            spacings = slip_zone_spacings(ds, scene.solver.nodes)
+            ds.attrs["widest_slip_zone_spacings"] = spacings
+            if 0.0 < spacings < RESOLVED_SPACINGS:
+                note = (f"the widest slip zone spans only {spacings:.3g} lattice spacings: slip and dissipation are "
+                        f"resolved to a few per cent (raise solver.nodes towards "
+                        f"{int(math.ceil(RESOLVED_SPACINGS / spacings * scene.solver.nodes))})")
+                ds.attrs["messages"] = "\n".join(m for m in (ds.attrs["messages"], note) if m)
         return ds
 
     def checkpoint(self, elapsed: float) -> dict:
