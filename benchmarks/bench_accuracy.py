@@ -234,7 +234,11 @@ def measure(sc, known, method, nodes, reference=None) -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--quick", action="store_true", help="fewer resolutions (a smoke run)")
+    parser.add_argument("--replot", action="store_true", help="redraw the page and plot from docs/benchmarks.md")
     args = parser.parse_args()
+    if args.replot:
+        write(*read_tables(ROOT / "docs" / "benchmarks.md"))
+        return
     resolutions = [64, 128, 256] if args.quick else [64, 128, 256, 512, 1024]
     rows = []
     for name, make in CASES.items():
@@ -288,6 +292,23 @@ def step_size_study(spcs, nodes=256) -> list:
 FLOOR = 1e-16  # where an error equal to rounding is drawn
 
 
+def read_tables(path):
+    """The rows of a page this script wrote (to redraw it without rerunning)."""
+    rows, steps = [], []
+    for line in Path(path).read_text().splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if not line.startswith("| ") or cells[0] == "scene" or set(cells[0]) <= {"-"}:
+            continue
+        if len(cells) == 8:
+            name, method, nodes, t, edge, q, D, note = cells
+            rows.append((name, method, None if nodes == "-" else int(nodes),
+                         {"time": float(t) / 1e3, "edge": float(edge), "q": float(q), "D_err": float(D), "note": note}))
+        elif len(cells) == 6:
+            name, spc, nodes, t, edge, D = cells
+            steps.append((name, int(spc), int(nodes), {"time": float(t) / 1e3, "edge": float(edge), "D_err": float(D)}))
+    return rows, steps
+
+
 def write(rows, steps=()):
     import matplotlib
 
@@ -306,7 +327,7 @@ def write(rows, steps=()):
             pts = [(t, max(e, FLOOR), n) for t, e, n in pts if math.isfinite(t) and math.isfinite(e)]
             if not pts:
                 continue
-            x, y, labels = zip(*sorted(pts))
+            x, y, labels = zip(*sorted(pts, key=lambda p: (p[2] or 0, p[0])))  # along the resolutions
             ax.loglog(x, y, style, label=method)
             if method == "general":
                 for xi, yi, n in zip(x, y, labels):

@@ -107,7 +107,8 @@ def build_method(scene, name: str, problem: NormalProblem, stations: np.ndarray 
 
 #: A slip zone narrower than this many lattice spacings (contact width / nodes) leaves slip and
 #: dissipation under-resolved: on the dovetail example (widest zone 1.2 % of the contact) the
-#: dissipation per cycle is 4.5 % low at 512 nodes (6 spacings), 1.9 % at 1024, 0.7 % at 2048.
+#: dissipation per cycle is 4.7 % low at 512 nodes (6 spacings), 2.0 % at 1024, 0.9 % at 2048
+#: (against 1.83e-4 J/m extrapolated from the three, docs/general_solver.md).
 RESOLVED_SPACINGS = 16.0
 
 
