@@ -396,6 +396,14 @@ class StepProblem:
         if guess is not None and L <= guess[0] < guess[1] <= R:
             starts.append(guess)
         starts += [(L + u * W, R - u * W) for u in (1e-3, 1e-5, 0.05, 0.25, 0.45)]
+        # Points locked near the slip limit make the equations flat between the contact
+        # edges and an old stick edge (a singular point of E), beyond which they turn
+        # steeply: a start just inside each singular point (as far from both edges), and a
+        # finer spread, find roots there that the starts above can miss.
+        inside = self.singular[(self.singular > L) & (self.singular < R)]
+        depths = np.minimum(inside - L, R - inside) * (1.0 + 1e-3)
+        starts += [(L + d, R - d) for d in np.unique(depths) if 2 * d < W]
+        starts += [(L + u * W, R - u * W) for u in (0.1, 0.15, 0.2, 0.3, 0.35, 0.4)]
         found = []
         for start in starts:
             sol = self._newton(cfg, start)
