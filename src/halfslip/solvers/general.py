@@ -63,8 +63,11 @@ STICK_COULOMB_TOL = 1e-3
 COULOMB_TOL = 1e-3
 #: Accepted reversed slip in a slip zone, relative to the largest slip of the step.
 DIRECTION_TOL = 0.05
-#: Points at which a configuration is checked against Coulomb's law.
+#: Points at which a configuration is checked against Coulomb's law ...
 CHECK_POINTS = 64
+#: ... and offsets (relative to the stick half-width) on both sides of each square-root point of
+#: E, where q can exceed f p in material locked at the slip limit between the Chebyshev points.
+SQRT_REGION = np.array([-1e-2, -3e-3, -1e-3, -1e-4, 1e-4, 1e-3, 3e-3, 1e-2])
 #: A step whose slip solve finds no configuration that passes the checks is split in two
 #: halves (the path stays straight), at most this many times over; so is a slipping step
 #: over which a stuck edge advances by more than MAX_STRIP of the contact width (the strain
@@ -75,7 +78,9 @@ MAX_STRIP = 0.02
 #: U-series terms of f chi p for its log potential (the rigid shift).
 FIT_TERMS = 128
 #: Lattice spacings from a stick edge within which slip-zone strains use the closed form.
-NEAR_SPACINGS = 4.0
+NEAR_SPACINGS = 4.7  # not 4: cluster point 6 sits at exactly 4 h, and the choice flipped with rounding
+#: A new stick edge within this many lattice spacings of an old singular point of its side replaces it.
+SNAP = 1e-6
 #: Points next to a stick edge whose strain changes by less than this fraction of max abs(E)
 #: are counted as stuck: they were locked at the slip limit with the same sign, and the
 #: equations cannot place the edge within such a band (the exact method keeps them stuck).
@@ -458,8 +463,11 @@ class GeneralSolver:
         """
         t = sie.chebyshev_nodes(CHECK_POINTS)
         x = shear.center + shear.radius * t
-        sing = problem.singular  # and where E has structure: its square-root points
-        x = np.concatenate((x, sing[(sing > shear.stick_left) & (sing < shear.stick_right)]))
+        sing = problem.singular  # and where E has structure: its square-root points and their
+        sing = sing[(sing > shear.stick_left) & (sing < shear.stick_right)]  # square-root regions
+        near = (sing[:, None] + shear.radius * SQRT_REGION[None, :]).ravel()
+        near = near[(near > shear.stick_left) & (near < shear.stick_right)]
+        x = np.concatenate((x, sing, near))
         p = problem.normal.pressure(x)
         q = shear.evaluate(x, p, self.f)
         return float(np.max(np.abs(q) - self.f * p)) / problem.p_scale
@@ -537,7 +545,8 @@ class GeneralSolver:
             X, kind, E_start, kappa, G0 = self._clusters(data, E_start, kappa, b1 if left_zone else None,
                                                              b2 if right_zone else None, N1)
         E_end, dg, _ = self._slip_update(problem, shear, X, E_start, data.spacing)
-        fresh = np.flatnonzero((kind >= SINGULAR_LEFT) & np.isin(X, [b1, b2]))
+        snap = SNAP * data.spacing
+        fresh = np.flatnonzero((kind >= SINGULAR_LEFT) & ((np.abs(X - b1) <= snap) | (np.abs(X - b2) <= snap)))
         if fresh.size:
             kappa[fresh] = pts.fit_kappa(X, kind, data.spacing, E_end, fresh)
         dissipation = _dissipation(X, dg, mem.normal, N1, f)
@@ -580,6 +589,10 @@ class GeneralSolver:
         for b, side, sing in ((b_left, -1, SINGULAR_LEFT), (b_right, 1, SINGULAR_RIGHT)):
             if b is None:
                 continue
+            # an old singular point of this side at (or within rounding of) the new stick edge:
+            # its square-root side is the new slip zone, overwritten -- the new point replaces it
+            # (kept, it would win the merge with its stale kappa)
+            drop |= (kind == sing) & (np.abs(X - b) <= SNAP * h)
             at = b + side * offsets
             at = at[(at > N1.left) & (at < N1.right)]
             new_x += [np.array([b]), at]
