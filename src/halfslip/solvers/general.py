@@ -59,6 +59,9 @@ DEFAULT_NODES = 512
 #: no-slip test (S1) is re-solved with slip zones (S1 is exact for small steps; this catches
 #: finite-step effects, not discretisation noise).
 STICK_COULOMB_TOL = 1e-3
+#: Where (S1) fails only at receding edges without a shear drive, full stick is accepted when
+#: its consistency residual is below this fraction of f max p (rounding: q = 0 gives 0).
+RECEDING_STICK_TOL = 1e-9
 #: Accepted Coulomb excess of a slip-zone configuration, relative to f max p.
 COULOMB_TOL = 1e-3
 #: Accepted reversed slip in a slip zone, relative to the largest slip of the step.
@@ -311,11 +314,21 @@ class GeneralSolver:
         problem = StepProblem(N1, self._slope, self._breaks, Xa, Ea, (g_left, g_right), self.A, f, loads1.sigma,
                               loads1.Q, self.nodes, bias, data.X[data.kind >= SINGULAR_LEFT])
         chosen = None
-        if sticks:
+        # (S1) asks each edge to advance; when it fails only because an edge recedes without a
+        # shear drive there (a moment tilting the contact under Q = sigma = 0, say), the fully
+        # stuck solution may well be bounded: try it before any slip solve (Coulomb decides)
+        drive = 1e-12 * f * max(abs(loads0.P), abs(loads1.P))
+        receding_only = not sticks and all((abs(u) <= drive) if v <= 0.0 else (abs(u) < f * v)
+                                           for u, v in zip(edges1.u, edges1.v))
+        if sticks or receding_only:
             sol = problem.solve(Config(0, 0))
             shear = problem.shear(sol)
             if self._coulomb(problem, shear) <= STICK_COULOMB_TOL:
-                chosen = (sol, shear)
+                # where (S1) failed, the stuck solution must also meet the consistency (bounded q
+                # with the edges held): its residual, relative to f max p, at rounding level
+                if sticks or abs(problem.gammas(Config(0, 0), N1.left, N1.right, 0.0)[0]) <= \
+                        RECEDING_STICK_TOL * problem.p_scale:
+                    chosen = (sol, shear)
         slipped = chosen is None
         message = ""
         if slipped:
