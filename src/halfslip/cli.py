@@ -67,7 +67,8 @@ def describe_scene(scene: Scene) -> list[str]:
         f"friction   f = {scene.friction:g}",
         f"geometry   {describe_profile(scene.profile)}",
         f"solver     method = {solver.method}, nodes = {solver.nodes}, "
-        f"skip_steady_cycles = {str(solver.skip_steady_cycles).lower()}",
+        f"skip_steady_cycles = {str(solver.skip_steady_cycles).lower()}"
+        + ("" if solver.edge_travel is None else f", edge_travel = {solver.edge_travel:g}"),
         f"output     fields = [{', '.join(output.fields)}], every = {output.every}, points = {output.points}",
         "",
     ]

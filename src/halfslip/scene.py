@@ -49,7 +49,7 @@ GEOMETRY_KINDS = ("hertz", "rounded_punch", "profile")
 
 _SCENE_KEYS = ("name", "material", "friction", "geometry", "loads", "solver", "output")
 _REQUIRED_KEYS = ("material", "friction", "geometry", "loads")
-_SOLVER_KEYS = ("method", "nodes", "skip_steady_cycles")
+_SOLVER_KEYS = ("method", "nodes", "skip_steady_cycles", "edge_travel")
 _OUTPUT_KEYS = ("fields", "every", "points")
 
 
@@ -67,16 +67,24 @@ class SolverOptions:
         Resolution of the general solver, >= 8.
     skip_steady_cycles : bool
         Stop marching a periodic segment once its cycle repeats.
+    edge_travel : float or None
+        Step-size control of the general solver: a slipping step over which a
+        stick edge travels more than this fraction of the contact width is
+        taken in halves (up to 16 sub-steps). None (the default) is off.
     """
 
     method: str = "auto"
     nodes: int = 512
     skip_steady_cycles: bool = True
+    edge_travel: float | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "method", check_choice(self.method, "solver.method", METHODS))
         object.__setattr__(self, "nodes", check_count(self.nodes, "solver.nodes", minimum=8))
         check_bool(self.skip_steady_cycles, "solver.skip_steady_cycles")
+        if self.edge_travel is not None:
+            object.__setattr__(self, "edge_travel", check_number(self.edge_travel, "solver.edge_travel",
+                                                                 positive=True))
 
 
 @dataclass(frozen=True)

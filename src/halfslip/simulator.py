@@ -102,7 +102,8 @@ def build_method(scene, name: str, problem: NormalProblem, stations: np.ndarray 
         return ExactMemory(problem, scene.friction, P_max, stations=stations)
     from .solvers.general import GeneralSolver
 
-    return GeneralSolver(problem, scene.friction, scene.solver.nodes, stations=stations)
+    return GeneralSolver(problem, scene.friction, scene.solver.nodes, stations=stations,
+                         edge_travel=scene.solver.edge_travel)
 
 
 #: A slip zone narrower than this many lattice spacings (contact width / nodes) leaves slip and

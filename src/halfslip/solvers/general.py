@@ -77,6 +77,8 @@ SQRT_REGION = np.array([-1e-2, -3e-3, -1e-3, -1e-4, 1e-4, 1e-3, 3e-3, 1e-2])
 #: locked in by its arrivals depends on how the force was shared during the step, which
 #: the gauge force F models to first order only).
 MAX_SPLITS = 3
+#: Halvings allowed to the step-size control (``edge_travel``): up to 2**CONTROL_SPLITS sub-steps.
+CONTROL_SPLITS = 4
 MAX_STRIP = 0.02
 #: U-series terms of f chi p for its log potential (the rigid shift).
 FIT_TERMS = 128
@@ -207,6 +209,10 @@ class GeneralSolver:
         is carried as a ``nodes``-term Chebyshev series where a series is used.
     stations : array_like, shape (n_stations,), optional
         Surface points whose accumulated slip :meth:`slip` returns.
+    edge_travel : float, optional
+        Step-size control: a slipping step over which a stick edge travels
+        more than this fraction of the contact width is taken in halves (up to
+        2**CONTROL_SPLITS sub-steps). Off by default.
 
     Attributes
     ----------
@@ -219,8 +225,12 @@ class GeneralSolver:
 
     name = "general"
 
-    def __init__(self, problem: NormalProblem, friction: float, nodes: int = DEFAULT_NODES, stations=None):
+    def __init__(self, problem: NormalProblem, friction: float, nodes: int = DEFAULT_NODES, stations=None,
+                 edge_travel: float | None = None):
         self.problem = problem
+        self.edge_travel = None if edge_travel is None else float(edge_travel)
+        if self.edge_travel is not None and not self.edge_travel > 0.0:
+            raise ValueError(f"edge_travel must be positive, got {edge_travel!r}")
         self.f = float(friction)
         if not self.f > 0.0:
             raise ValueError(f"friction must be positive, got {friction!r}")
@@ -260,7 +270,8 @@ class GeneralSolver:
         report : StepReport
         """
         self.counters["steps"] += 1
-        return self._step(state, float(t1), Loads(*(float(v) for v in loads1)), MAX_SPLITS)
+        depth = MAX_SPLITS if self.edge_travel is None else CONTROL_SPLITS
+        return self._step(state, float(t1), Loads(*(float(v) for v in loads1)), depth)
 
     def _step(self, state: ContactState, t1: float, loads1: Loads, splits: int) -> tuple[ContactState, StepReport]:
         """One step, split in halves while ``_single`` asks for it and ``splits`` remain."""
@@ -346,6 +357,12 @@ class GeneralSolver:
                                                                                   strips))
         new, report = self._finish(state, t1, loads1, N1, data, problem, sol, shear, slipped, normal_changed,
                                    message, edges1)
+        if self.edge_travel is not None and slipped and mem.normal is not None:
+            # step-size control: a slipping step whose stick edges travel further than
+            # edge_travel of the width is taken in halves (the dissipation and the arrival
+            # strains are first order in the step)
+            travel = max(_apart(new.stick_left, state.stick_left), _apart(new.stick_right, state.stick_right))
+            split |= math.isfinite(travel) and travel > self.edge_travel * (N1.right - N1.left)
         return new, report, split
 
     # -- the material points of the new contact ----------------------------
