@@ -326,12 +326,14 @@ def test_an_interrupted_sweep_resumes_with_only_the_missing_cases(tmp_path, grid
 def test_the_command_line_stops_on_sigint_and_the_same_command_finishes(tmp_path):
     """A real Ctrl-C to ``halfslip sweep`` in a subprocess, with 2 worker processes.
 
-    The cases are made slow (400 steps per cycle, ~0.6 s each) so that the
-    signal comes while cases are left; its arrival is timed by the per-case
+    The cases are made slow (1000 steps per cycle, ~1.5 s each) so that the
+    signal comes while cases are left, even when this test process is starved
+    by a loaded machine (at 400 steps per cycle the sweep once finished before
+    the watcher saw two case files); its arrival is timed by the per-case
     files appearing in --cases-dir.
     """
     body = ("vary:\n  friction: [0.4, 0.5, 0.6, 0.7]\n  loads[1].cycles.Q.amplitude: [1.0e4, 2.0e4]\n"
-            "set:\n  loads[1].cycles.steps_per_cycle: 400\n")
+            "set:\n  loads[1].cycles.steps_per_cycle: 1000\n")
     path = write_sweep(tmp_path, body)
     out, cases = tmp_path / "out.h5", tmp_path / "cases"
     command = [sys.executable, "-c", "from halfslip.cli import main; main()", "sweep", str(path), "-o", str(out), "--workers", "2",
