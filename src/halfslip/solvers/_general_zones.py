@@ -401,9 +401,10 @@ class StepProblem:
         # steeply: a start just inside each singular point (as far from both edges), and a
         # finer spread, find roots there that the starts above can miss.
         inside = self.singular[(self.singular > L) & (self.singular < R)]
-        depths = np.minimum(inside - L, R - inside) * (1.0 + 1e-3)
-        starts += [(L + d, R - d) for d in np.unique(depths) if 2 * d < W]
-        starts += [(L + u * W, R - u * W) for u in (0.1, 0.15, 0.2, 0.3, 0.35, 0.4)]
+        depths = np.unique(np.minimum(inside - L, R - inside) * (1.0 + 1e-3))
+        depths = depths[2 * depths < W][:SINGULAR_STARTS]  # the outermost: where the bands lie
+        starts += [(L + d, R - d) for d in depths]
+        starts += [(L + u * W, R - u * W) for u in (0.15, 0.3)]
         found = []
         for start in starts:
             sol = self._newton(cfg, start)
@@ -660,6 +661,11 @@ def _xlog(c, v):
     nz = (c != 0.0) & (v != 0.0)
     out[nz] = c[nz] * np.log(np.abs(v[nz]))
     return out
+
+
+#: Starts of the two-edge Newton laid just inside the outermost singular points of E (each
+#: costs a Newton solve on a hard step; an under-resolved rounded punch has dozens).
+SINGULAR_STARTS = 3
 
 
 def _brent(fun, a, b, fa, fb, xtol, maxiter=100):
