@@ -280,34 +280,28 @@ def substep_study(factors, spc=25, nodes=256) -> list:
     exact = hs.simulate(sc, method="exact")
     t0, t1 = h.t[-1] - 1.0, h.t[-1]
     D_ref = float(np.interp(t1, exact.t, exact.dissipation) - np.interp(t0, exact.t, exact.dissipation))
+    def row(scene, label, steps):
+        began = time.perf_counter()
+        ds = hs.simulate(scene, method="general", nodes=nodes)
+        wall = time.perf_counter() - began
+        D = float(np.interp(t1, ds.t, ds.dissipation) - np.interp(t0, ds.t, ds.dissipation))
+        cyc = ds.sel(t=slice(t0, t1))
+        edge = max(abs(float(cyc.stick_left.max()) - known["permanent"][0]),
+                   abs(float(cyc.stick_right.min()) - known["permanent"][1])) / known["width"]
+        print(label, "done", flush=True)
+        # time per step of the history run (the control's sub-steps are inside its steps)
+        return (label, steps, nodes, {"time": wall / ds.attrs["count_steps"], "edge": edge,
+                                      "D_err": abs(D - D_ref) / D_ref})
+
     out = []
     for k in factors:
         t = np.interp(np.arange((h.t.size - 1) * k + 1) / k, np.arange(h.t.size), h.t)
         fine = dataclasses.replace(sc, history=hs.LoadHistory.from_arrays(t, np.interp(t, h.t, h.P),
                                                                           np.interp(t, h.t, h.Q)))
-        start = time.perf_counter()
-        ds = hs.simulate(fine, method="general", nodes=nodes)
-        wall = time.perf_counter() - start
-        D = float(np.interp(t1, ds.t, ds.dissipation) - np.interp(t0, ds.t, ds.dissipation))
-        cyc = ds.sel(t=slice(t0, t1))
-        edge = max(abs(float(cyc.stick_left.max()) - known["permanent"][0]),
-                   abs(float(cyc.stick_right.min()) - known["permanent"][1])) / known["width"]
-        out.append((f"motor loop, {spc} steps per cycle, each cut in {k}", spc * k, nodes,
-                    {"time": wall / ds.attrs["count_steps"], "edge": edge, "D_err": abs(D - D_ref) / D_ref}))
-        print("sub-steps", k, "done", flush=True)
+        out.append(row(fine, f"motor loop, {spc} steps per cycle, each cut in {k}", spc * k))
     for travel in (0.01, 0.005):  # the step-size control: sub-steps only where the stick edges travel
         controlled = dataclasses.replace(sc, solver=dataclasses.replace(sc.solver, edge_travel=travel))
-        start = time.perf_counter()
-        ds = hs.simulate(controlled, method="general", nodes=nodes)
-        wall = time.perf_counter() - start
-        D = float(np.interp(t1, ds.t, ds.dissipation) - np.interp(t0, ds.t, ds.dissipation))
-        cyc = ds.sel(t=slice(t0, t1))
-        edge = max(abs(float(cyc.stick_left.max()) - known["permanent"][0]),
-                   abs(float(cyc.stick_right.min()) - known["permanent"][1])) / known["width"]
-        # time per step of the user's history (the sub-steps are inside it)
-        out.append((f"motor loop, {spc} steps per cycle, edge_travel {travel}", spc, nodes,
-                    {"time": wall / ds.attrs["count_steps"], "edge": edge, "D_err": abs(D - D_ref) / D_ref}))
-        print("edge_travel", travel, "done", flush=True)
+        out.append(row(controlled, f"motor loop, {spc} steps per cycle, edge_travel {travel}", spc))
     return out
 
 
