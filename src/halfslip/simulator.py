@@ -455,7 +455,7 @@ class CycleSkipper:
     """
 
     def __init__(self, history, solver):
-        self.same = getattr(solver, "same_state", None) or _same_memory
+        self.same = getattr(solver, "same_state", None)
         # a solver whose states agree only to a tolerance also asks that the cycle's stick
         # edges repeat, step by step, to ``cycle_tolerance(state)`` [m]: a difference that
         # the memory at the cycle's end hides (a slip zone that reached less far at a peak
@@ -485,9 +485,9 @@ class CycleSkipper:
                 return
 
     def _trajectory_repeats(self, k: int, state: ContactState) -> bool:
-        trace = self.traces.get(k)
         if self.tolerance is None:
             return True
+        trace = self.traces.get(k)
         if trace is None:
             return False
         prev, cur = trace["previous"], np.asarray(trace["current"], dtype=float).reshape(-1, 2)
@@ -527,39 +527,6 @@ class CycleSkipper:
         self.skipped[k] = remaining
         new = dataclasses.replace(state, t=float(self.t[seg.stop]), dissipation=state.dissipation + remaining * per_cycle)
         return seg.stop, new
-
-
-def _same_memory(a: ContactState, b: ContactState, rtol: float = 1e-10) -> bool:
-    """Whether two states carry the same memory, field by field, to ``rtol``.
-
-    For solvers without a ``same_state`` of their own: every array, number and
-    nested dataclass of the memory must agree (arrays relative to their largest
-    entry, NaN equal to NaN); time and dissipation may differ.
-    """
-    return _close(a.memory, b.memory, rtol) and _close(
-        (a.stick_left, a.stick_right, a.contact_left, a.contact_right),
-        (b.stick_left, b.stick_right, b.contact_left, b.contact_right), rtol)
-
-
-def _close(x, y, rtol: float) -> bool:
-    if dataclasses.is_dataclass(x) and not isinstance(x, type):
-        return type(x) is type(y) and all(
-            _close(getattr(x, f.name), getattr(y, f.name), rtol) for f in dataclasses.fields(x))
-    if isinstance(x, np.ndarray) or isinstance(y, np.ndarray):
-        x, y = np.asarray(x), np.asarray(y)
-        if x.shape != y.shape:
-            return False
-        if x.dtype.kind not in "fc":
-            return bool(np.array_equal(x, y))
-        scale = float(np.nanmax(np.abs(x))) if x.size and np.isfinite(x).any() else 0.0
-        return bool(np.allclose(x, y, rtol=0.0, atol=rtol * scale, equal_nan=True))
-    if isinstance(x, (tuple, list)):
-        return isinstance(y, (tuple, list)) and len(x) == len(y) and all(_close(u, v, rtol) for u, v in zip(x, y))
-    if isinstance(x, float) or isinstance(y, float):
-        if x is None or y is None:
-            return x is y
-        return (np.isnan(x) and np.isnan(y)) or abs(x - y) <= rtol * max(abs(x), abs(y))
-    return x == y
 
 
 def _fields(solver, state: ContactState, save: SaveAt) -> dict:

@@ -100,7 +100,8 @@ TRIM_TOL = 1e-3
 SAME_STATE_TOL = 1e-4
 #: Gauss-Legendre points per interval of the dissipation quadrature (on [0, 1]).
 DISSIPATION_GAUSS = 4
-_GAUSS = tuple(0.5 * (v + 1.0) if k == 0 else 0.5 * v for k, v in enumerate(np.polynomial.legendre.leggauss(DISSIPATION_GAUSS)))
+_LEGENDRE_NODES, _LEGENDRE_WEIGHTS = np.polynomial.legendre.leggauss(DISSIPATION_GAUSS)
+_GAUSS = (0.5 * (_LEGENDRE_NODES + 1.0), 0.5 * _LEGENDRE_WEIGHTS)  # nodes and weights on [0, 1]
 
 
 @dataclass(frozen=True)
@@ -821,11 +822,8 @@ def _dissipation(X, dg, N0: NormalSolution | None, N1: NormalSolution, f) -> flo
     lo, hi = X[moving], X[moving + 1]
     x = lo[:, None] + (hi - lo)[:, None] * t[None, :]
     slip = np.abs(dg[moving][:, None] + (dg[moving + 1] - dg[moving])[:, None] * t[None, :])
-    p = N1.pressure(x)
-    if N0 is not None:
-        p = 0.5 * (p + N0.pressure(x))
-    else:
-        p = 0.5 * p
+    p0 = N0.pressure(x) if N0 is not None else 0.0  # a step from separation starts unloaded
+    p = 0.5 * (p0 + N1.pressure(x))
     return float(f * np.sum((p * slip) @ w * (hi - lo)))
 
 
