@@ -26,7 +26,10 @@ class HalfslipGroup(click.Group):
     """A click group whose commands report bad input in one line.
 
     Commands added with ``@main.command()`` need no error handling of their
-    own for :class:`HalfslipInputError`.
+    own: a :class:`HalfslipInputError` or a click usage error anywhere below a
+    command becomes one line on stderr and exit status 2; an interrupt that
+    reaches the top (Ctrl-C during start-up, a second Ctrl-C) one line and
+    exit status 130. Never a traceback.
     """
 
     def invoke(self, ctx: click.Context) -> Any:
@@ -37,8 +40,104 @@ class HalfslipGroup(click.Group):
             click.echo(f"halfslip: {error}", err=True)
             ctx.exit(EXIT_INPUT_ERROR)
 
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        """Click's main, with usage errors and interrupts in the one-line form."""
+        import sys
 
-@click.group(cls=HalfslipGroup)
+        if not standalone_mode:
+            return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        try:
+            code = self._main(args, prog_name, complete_var, **extra)
+        except _NO_ARGS_IS_HELP as error:  # bare ``halfslip``: the help, as --help
+            click.echo(error.ctx.get_help())
+            sys.exit(0)
+        except click.UsageError as error:
+            raw = list(sys.argv[1:] if args is None else args)
+            click.echo(f"halfslip: {usage_error_line(error, raw)}", err=True)
+            sys.exit(EXIT_INPUT_ERROR)
+        except click.ClickException as error:
+            click.echo(f"halfslip: {_one_line(error.format_message())}", err=True)
+            sys.exit(error.exit_code)
+        except (click.Abort, KeyboardInterrupt):
+            _ignore_interrupts()
+            click.echo("halfslip: interrupted", err=True)
+            sys.exit(EXIT_INTERRUPTED)
+        _ignore_interrupts()
+        sys.exit(code if isinstance(code, int) else 0)
+
+    def _main(self, args, prog_name, complete_var, **extra):
+        try:
+            return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        except SystemExit:
+            # a command's own exit (e.g. 130 after an interrupted run): what is written is written;
+            # a further Ctrl-C while the interpreter shuts down must not kill it by the signal
+            _ignore_interrupts()
+            raise
+
+
+def _ignore_interrupts() -> None:
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+
+
+_NO_ARGS_IS_HELP = getattr(click.exceptions, "NoArgsIsHelpError", ())  # click >= 8.2
+
+EXIT_INTERRUPTED = 130
+"""Exit status of an interrupted command (128 + SIGINT, as a shell reports it)."""
+
+
+def _one_line(text: str) -> str:
+    return HalfslipInputError(" ".join(str(text).split())).__str__()
+
+
+def usage_error_line(error: click.UsageError, args: list[str] = ()) -> str:
+    """``FILE: --option: message`` for a click usage error, naming the command's file argument.
+
+    The file is the command's file argument when click had read it, else the
+    first of the raw ``args`` that names an existing file.
+    """
+    import os
+
+    ctx = error.ctx
+    file = None
+    if ctx is not None:
+        for name in ("scene_file", "result_file", "sweep_file"):
+            if ctx.params.get(name):
+                file = str(ctx.params[name])
+                break
+    if file is None:  # the bad option came before the file argument: find it in the raw arguments
+        file = next((a for a in args if not a.startswith("-") and os.path.isfile(a)), None)
+    field = None
+    param = getattr(error, "param", None)
+    if param is not None:
+        field = param.opts[0] if getattr(param, "opts", None) else param.name
+    message = error.format_message()
+    if field and message.startswith("Invalid value for"):
+        message = message.split(":", 1)[-1].strip()
+    command = ctx.command_path if ctx is not None else "halfslip"
+    return str(HalfslipInputError(f"{' '.join(message.split())} (see '{command} --help')", file=file, field=field))
+
+
+class Seconds(click.ParamType):
+    """A finite, positive number of seconds."""
+
+    name = "seconds"
+
+    def convert(self, value, param, ctx):
+        import math
+
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            self.fail(f"expected a number of seconds, got {str(value)[:40]!r}", param, ctx)
+        if not math.isfinite(number) or number <= 0:
+            self.fail(f"must be a finite number of seconds > 0, got {str(value)[:40]!r}", param, ctx)
+        return number
+
+
+@click.group(cls=HalfslipGroup, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="halfslip")
 def main() -> None:
     """Frictional partial slip of elastic half-plane contacts, from YAML scenes."""
@@ -145,65 +244,119 @@ class _Progress:
 @click.option("--method", type=click.Choice(["auto", "exact", "general"]), help="Override solver.method.")
 @click.option("--nodes", type=click.IntRange(min=8), help="Override solver.nodes (general solver).")
 @click.option("--resume", is_flag=True, help="Continue the unfinished run in OUT.h5.")
-@click.option("--checkpoint-every", type=click.FloatRange(min=0.0), default=2.0, show_default=True,
-              help="Seconds between rewrites of OUT.h5 during the run (at least).")
+@click.option("--overwrite", is_flag=True, help="Replace OUT.h5 even when it is not a halfslip result.")
+@click.option("--checkpoint-every", type=Seconds(), default=2.0, show_default=True,
+              help="Seconds between rewrites of OUT.h5 during the run (at least; > 0).")
 @click.option("--quiet", is_flag=True, help="Print nothing but errors.")
 def run(scene_file: str, output: str | None, method: str | None, nodes: int | None, resume: bool,
-        checkpoint_every: float, quiet: bool) -> None:
+        overwrite: bool, checkpoint_every: float, quiet: bool) -> None:
     """March a scene's load history and write the result dataset (HDF5).
 
     The file is rewritten atomically every few seconds with every completed
     step and a checkpoint, so a killed run loses at most the last interval.
     Ctrl-C or SIGTERM stops the run and writes every completed step, marked
-    incomplete (attribute ``complete = 0``); the exit status is then 130, and
-    ``--resume`` continues it to the same result as an uninterrupted run.
+    incomplete (attribute complete = 0); the exit status is then 130, and
+    --resume continues it to the same result as an uninterrupted run. A
+    second Ctrl-C stops at once and keeps the file last written.
+
+    OUT.h5 is checked before anything is computed: it must not be an input
+    of the run, and an existing file that is not a halfslip result is
+    replaced only with --overwrite. One process at a time writes a file.
     """
     import signal
     import sys
     from pathlib import Path
 
-    from .io import RunFileWriter, read_checkpoint, read_result
+    from .io import OutputLock, RunFileWriter, check_output
     from .simulator import MethodError, simulate
 
     scene = load_scene(scene_file)
-    out = Path(output) if output else Path(f"{Path(scene_file).stem}.h5")
-    if not out.parent.exists():
-        raise HalfslipInputError(f"folder {str(out.parent)!r} does not exist", field="-o")
-    previous_run = None
-    if resume:
-        if not out.exists():
-            raise HalfslipInputError(f"{out} does not exist: nothing to resume", field="--resume")
-        try:
-            previous_run = (read_result(out), read_checkpoint(out))
-        except (OSError, ValueError, KeyError) as error:
-            raise HalfslipInputError(f"{out} is not a halfslip run file ({error})", field="--resume") from None
-
+    out = check_output(Path(output) if output else Path(f"{Path(scene_file).stem}.h5"),
+                       inputs=scene_inputs(scene), overwrite=overwrite or resume)
     stop = []
 
     def _request_stop(signum, frame):
-        # first SIGINT / SIGTERM: finish the current step, write, exit; a second one: stop at once
+        # first SIGINT / SIGTERM: finish the current step, write, exit; a second one: stop at once,
+        # keeping the file as last written (a write under way is abandoned, its temporary removed)
         if stop:
-            raise KeyboardInterrupt
+            stop_now(out)
         stop.append(signum)
 
-    handlers = {sig: signal.signal(sig, _request_stop) for sig in (signal.SIGINT, signal.SIGTERM)}
-    progress = _Progress(enabled=not quiet and sys.stderr.isatty())
-    try:
-        result = simulate(scene, method=method, nodes=nodes, progress=progress,
-                          writer=RunFileWriter(out, min_interval=checkpoint_every), resume=previous_run,
-                          stop_requested=lambda: bool(stop))
-    except MethodError as error:
-        raise HalfslipInputError(str(error), file=str(scene.path) if scene.path else None, field="solver.method") from None
-    finally:
-        progress.close()
-        for sig, handler in handlers.items():
-            signal.signal(sig, handler)
+    with OutputLock(out):
+        previous_run = read_unfinished_run(out, scene) if resume else None
+        handlers = {sig: signal.signal(sig, _request_stop) for sig in (signal.SIGINT, signal.SIGTERM)}
+        progress = _Progress(enabled=not quiet and sys.stderr.isatty())
+        try:
+            result = simulate(scene, method=method, nodes=nodes, progress=progress,
+                              writer=RunFileWriter(out, min_interval=checkpoint_every), resume=previous_run,
+                              stop_requested=lambda: bool(stop))
+        except MethodError as error:
+            raise HalfslipInputError(str(error), file=str(scene.path) if scene.path else None,
+                                     field="solver.method") from None
+        except HalfslipInputError as error:  # the run file refused on resuming names that file
+            raise (error.located(str(out), None) if error.field == "--resume" else error) from None
+        finally:
+            progress.close()
+            for sig, handler in handlers.items():
+                signal.signal(sig, handler)
     if not quiet:
         click.echo("\n".join(summarize(result, out)))
     if not result.attrs["complete"]:
         click.echo(f"halfslip: interrupted after step {result.attrs['steps_done']}; "
                    f"{result.sizes['t']} stored steps written to {out} (continue with --resume)", err=True)
-        sys.exit(130)
+        sys.exit(EXIT_INTERRUPTED)
+
+
+def stop_now(out) -> None:
+    """Exit at once with status 130 (a second Ctrl-C), leaving ``out`` as last written."""
+    import os
+    import sys
+
+    from .io import remove_temporaries_being_written
+
+    remove_temporaries_being_written()
+    sys.stderr.write(f"halfslip: stopped at once; {out} holds what was last written\n")
+    sys.stderr.flush()
+    os._exit(EXIT_INTERRUPTED)
+
+
+def scene_inputs(scene: Scene) -> list:
+    """The files a scene was read from: the scene file, its profile table and its load tables."""
+    files = [scene.path, getattr(scene.profile, "source", None)]
+    files += [segment.source for segment in scene.history.segments if segment.source is not None]
+    return [f for f in files if f is not None]
+
+
+def read_unfinished_run(out, scene: Scene):
+    """The stored steps and checkpoint of the unfinished run in ``out``, for ``--resume``.
+
+    The file is inspected as untrusted data (``io.check_result_file``) and
+    must belong to ``scene`` (its scene hash) before its checkpoint is
+    decoded; the checkpoint is pure data (``io.read_checkpoint``).
+    """
+    from .io import CheckpointError, read_checkpoint, read_result
+    from .simulator import scene_hash
+
+    if not out.exists():
+        raise HalfslipInputError("does not exist: nothing to resume", file=str(out), field="--resume")
+    try:
+        ds = read_result(out)
+    except CheckpointError as error:
+        raise HalfslipInputError(f"not a halfslip run file: {error}", file=str(out), field="--resume") from None
+    except (OSError, ValueError, KeyError, TypeError) as error:
+        raise HalfslipInputError(f"not a halfslip run file (cannot read it: {type(error).__name__})",
+                                 file=str(out), field="--resume") from None
+    if ds.attrs.get("scene_sha256") != scene_hash(scene):
+        raise HalfslipInputError("the file to resume was written by a different scene", file=str(out),
+                                 field="--resume")
+    try:
+        checkpoint = read_checkpoint(out)
+    except CheckpointError as error:
+        raise HalfslipInputError(f"its checkpoint is refused: {error}", file=str(out), field="--resume") from None
+    except (OSError, ValueError, KeyError, TypeError) as error:
+        raise HalfslipInputError(f"its checkpoint cannot be read ({type(error).__name__})", file=str(out),
+                                 field="--resume") from None
+    return ds, checkpoint
 
 
 def summarize(result, path) -> list[str]:
@@ -274,12 +427,25 @@ def summarize(result, path) -> list[str]:
 @click.argument("scene_file", metavar="SCENE.yaml")
 @click.option("--segment", type=int, help="Index of the cycles segment (default: the last one).")
 @click.option("-o", "--output", "output", metavar="OUT.h5", help="Also write the steady-state dataset.")
-def steady(scene_file: str, segment: int | None, output: str | None) -> None:
+@click.option("--overwrite", is_flag=True, help="Replace OUT.h5 even when it is not a halfslip result.")
+def steady(scene_file: str, segment: int | None, output: str | None, overwrite: bool) -> None:
     """Permanent stick zone of the cyclic part of a scene, found directly."""
+    from contextlib import nullcontext
+
+    from .io import OutputLock, check_output
     from .steady import steady_state
 
     scene = load_scene(scene_file)
-    ds = steady_state(scene, segment)
+    out = check_output(output, inputs=scene_inputs(scene), overwrite=overwrite) if output else None
+    with OutputLock(out) if out is not None else nullcontext():
+        _steady(scene, segment, out, steady_state)
+
+
+def _steady(scene: Scene, segment: int | None, out, steady_state) -> None:
+    try:
+        ds = steady_state(scene, segment)
+    except HalfslipInputError as error:
+        raise error.located(str(scene.path) if scene.path else None, None) from None
     regime = int(ds["regime"])
     names = {1: "full stick (shakedown)", 2: "partial slip", 3: "gross sliding"}
     rows = [
@@ -296,10 +462,11 @@ def steady(scene_file: str, segment: int | None, output: str | None) -> None:
     for key, value in rows:
         click.echo(f"{key:<{width}}  {value}")
     click.echo(f"note: {ds.attrs['note']}")
-    if output:
+    if out is not None:
         from .io import write_result
 
-        write_result(ds, output)
+        write_result(ds, out)
+        click.echo(f"written to {out}")
 
 
 @main.command()
@@ -371,9 +538,10 @@ def plot(result_file: str, output: str | None, kinds: tuple, at: tuple) -> None:
               help="Local worker processes (default: the number of cores; 1 runs in this process).")
 @click.option("--scheduler", metavar="ADDRESS", help="Run the cases on this dask.distributed scheduler.")
 @click.option("--cases-dir", "cases_dir", metavar="DIR", help="Also write each case's full result to DIR.")
+@click.option("--overwrite", is_flag=True, help="Replace OUT.h5 even when it is not a halfslip result.")
 @click.option("--quiet", is_flag=True, help="Print nothing but errors.")
 def sweep_command(sweep_file: str, output: str | None, workers: int | None, scheduler: str | None,
-                  cases_dir: str | None, quiet: bool) -> None:
+                  cases_dir: str | None, overwrite: bool, quiet: bool) -> None:
     """Run every case of a sweep file and write one dataset of per-case summaries.
 
     Ctrl-C or SIGTERM stops the sweep and writes the finished cases (exit
@@ -388,16 +556,20 @@ def sweep_command(sweep_file: str, output: str | None, workers: int | None, sche
     from .sweep import load_sweep
     from .sweep import sweep as run_sweep
 
+    from .io import OutputLock, check_output
+
     spec = load_sweep(sweep_file)
-    out = Path(output) if output else Path(f"{Path(sweep_file).stem}.h5")
+    out = check_output(Path(output) if output else Path(f"{Path(sweep_file).stem}.h5"),
+                       inputs=[spec.file, spec.scene_path], overwrite=overwrite)
 
     def _terminate(signum, frame):  # SIGTERM behaves like Ctrl-C: stop and keep what is done
         raise KeyboardInterrupt
 
     previous = signal.signal(signal.SIGTERM, _terminate)
     try:
-        result = run_sweep(spec, output=out, workers=workers, scheduler=scheduler, cases_dir=cases_dir,
-                           progress=not quiet)
+        with OutputLock(out):
+            result = run_sweep(spec, output=out, workers=workers, scheduler=scheduler, cases_dir=cases_dir,
+                               progress=not quiet)
     except ImportError as error:
         raise click.ClickException(str(error)) from None
     finally:

@@ -302,7 +302,9 @@ def _build_profile(spec: Any, base: Path) -> Any:
         check_mapping(spec, "geometry", ("kind", "file"))
         name = check_string(spec["file"], "geometry.file")
         columns, _ = read_csv_columns(base / name, ("x", "h"), ("x", "h"), "geometry")
-        return _make(geometry.TabulatedProfile, "geometry.file", columns["x"], columns["h"])
+        profile = _make(geometry.TabulatedProfile, "geometry.file", columns["x"], columns["h"])
+        profile.source = str(base / name)  # an input of the run: never an output (cli.scene_inputs)
+        return profile
     check_mapping(spec, "geometry", ("kind", "x", "h"), ("x", "h"))
     x, h = check_column(spec["x"], "geometry.x"), check_column(spec["h"], "geometry.h")
     if x.size != h.size:

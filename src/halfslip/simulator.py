@@ -238,7 +238,10 @@ def simulate(
         while run.i < n:
             if stop_requested is not None and stop_requested():
                 raise KeyboardInterrupt
-            run.advance()
+            if resume is not None and run.i == int(resume[1]["i"]):
+                _first_step_after_resume(run)
+            else:
+                run.advance()
             if progress is not None:
                 progress(run.i, n)
             if writer is not None and writer.due():
@@ -254,6 +257,25 @@ def simulate(
     if writer is not None:
         writer.write(ds)
     return ds
+
+
+def _first_step_after_resume(run: _Run) -> None:
+    """The first step from a checkpoint read back from a file.
+
+    The checkpoint is pure data of the right record kinds and shape
+    (``_Run.restore``), but a file edited by hand can still hold a memory whose
+    arrays do not fit together; the first step is where that shows. It is
+    reported as a refused checkpoint, not a traceback: an unedited checkpoint
+    is a state the uninterrupted run had, so its first step cannot fail here.
+    """
+    from .errors import HalfslipInputError
+
+    try:
+        run.advance()
+    except (ValueError, IndexError, TypeError, KeyError, AttributeError, ZeroDivisionError,
+            FloatingPointError) as error:
+        raise HalfslipInputError(f"the run cannot continue from its checkpoint ({type(error).__name__}); "
+                                 "the file was changed after halfslip wrote it", field="--resume") from None
 
 
 def _add_permanent_stick(ds: xr.Dataset) -> None:
@@ -428,6 +450,9 @@ class _Run:
                                      field="--resume")
         if checkpoint is None:
             raise HalfslipInputError("the file holds a finished run: nothing to resume", field="--resume")
+        problem = self._checkpoint_problem(ds, checkpoint)
+        if problem is not None:
+            raise HalfslipInputError(f"its checkpoint does not fit this run: {problem}", field="--resume")
         self.rec = _Records()
         self.rec.load(ds, self.save.fields)
         self.i = int(checkpoint["i"])
@@ -440,6 +465,38 @@ class _Run:
             self.skipper.skipped = dict(checkpoint["skipper"]["skipped"])
             self.skipper.traces = {k: {"previous": v["previous"], "current": [tuple(r) for r in v["current"]]}
                                    for k, v in checkpoint["skipper"].get("traces", {}).items()}
+
+
+    def _checkpoint_problem(self, ds: xr.Dataset, checkpoint) -> str | None:
+        """What is wrong with a decoded checkpoint for this run (None when it fits).
+
+        The decoder guarantees pure data of known record kinds; this checks the
+        shape a run writes, so that a file edited by hand is refused here
+        rather than failing somewhere in the march.
+        """
+        keys = {"i", "state", "counters", "messages", "elapsed", "skipper"}
+        if not isinstance(checkpoint, dict) or set(checkpoint) != keys:
+            return f"expected the entries {sorted(keys)}"
+        i = checkpoint["i"]
+        if not isinstance(i, int) or not 0 <= i <= self.scene.history.n_steps:
+            return f"step {i!r} is not a step of this history"
+        state = checkpoint["state"]
+        memory_type = type(self.state.memory)
+        if not isinstance(state, ContactState) or not isinstance(state.memory, memory_type):
+            return f"its state is not a {memory_type.__name__} state of method {self.name}"
+        if state.t != float(self.scene.history.t[i]):
+            return f"its state is at t = {state.t!r}, not at step {i}"
+        counters = checkpoint["counters"]
+        if not (isinstance(counters, dict) and set(counters) == set(self.counters)
+                and all(isinstance(v, int) and v >= 0 for v in counters.values())):
+            return "its counters are malformed"
+        if not (isinstance(checkpoint["messages"], list) and all(isinstance(m, str) for m in checkpoint["messages"])):
+            return "its messages are not text"
+        if not isinstance(checkpoint["elapsed"], float):
+            return "its elapsed time is not a number"
+        if int(ds.sizes.get("t", 0)) > i + 1:
+            return "the file stores more steps than the checkpoint has marched"
+        return None
 
 
 class CycleSkipper:

@@ -37,6 +37,11 @@ def cyclic_segment(scene, index: int | None = None):
     """The ``cycles`` segment to analyse: ``index`` into the history, or the last one."""
     segments = scene.history.segments
     if index is not None:
+        cyclic = [i for i, seg in enumerate(segments) if seg.kind == "cycles"]
+        if isinstance(index, bool) or not isinstance(index, int) or not 0 <= index < len(segments):
+            which = f"the cycles segments are {', '.join(map(str, cyclic))}" if cyclic else "it has no cycles segment"
+            raise HalfslipInputError(f"the history has segments 0 .. {len(segments) - 1} and {which}; "
+                                     f"got {str(index)[:40]}", field="--segment")
         seg = segments[index]
         if seg.kind != "cycles":
             raise HalfslipInputError(f"segment {index} is a {seg.kind}, not cycles", field=f"loads[{index}]")
@@ -187,7 +192,8 @@ def steady_state(scene, segment: int | None = None, *, per_cycle: bool = True) -
                                              "flag_values": np.arange(4, dtype=np.int8),
                                              "flag_meanings": Regime.flag_meanings()}),
         },
-        attrs={"method": method, "note": note, "scene_name": scene.name, "max_shear_ratio": shear_ratio, **attrs},
+        attrs={"halfslip_version": _version(), "method": method, "note": note, "scene_name": scene.name,
+               "max_shear_ratio": shear_ratio, **attrs},
     )
     if per_cycle:
         ds = ds.merge(_per_cycle_quantities(scene, index, seg))
@@ -262,3 +268,9 @@ def _per_cycle_quantities(scene, index, seg) -> xr.Dataset:
         },
         coords={"x": ("x", ds.x.values, {"units": "m", "long_name": "surface coordinate"})},
     )
+
+
+def _version() -> str:
+    from . import __version__
+
+    return __version__

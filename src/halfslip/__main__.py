@@ -1,0 +1,4 @@
+"""``python -m halfslip``: the command line."""
+from .cli import main
+
+main()
