@@ -412,6 +412,15 @@ def summarize(result, path) -> list[str]:
         first = f", first cycle {energy[0]:.6g} J/m" if energy.size > 1 else ""
         lines.append(f"  dissipation per cycle {energy[-1]:.6g} J/m (last full cycle){first}")
     lines.append(f"  dissipated {float(last.dissipation):.6g} J/m in total")
+    failed = int(result.attrs.get("count_failed_steps", 0))
+    if failed and "converged" in result:
+        bad = result["converged"].values == 0
+        t_bad, residual = result["t"].values[bad], result["residual"].values[bad]
+        worst = int(np.argmax(np.where(np.isfinite(residual), residual, np.inf)))
+        lines.append(f"  NOT CONVERGED: {failed} of {steps} steps did not meet the solver's tolerance "
+                     f"(first at t = {t_bad[0]:.6g} s, worst at t = {t_bad[worst]:.6g} s, residual "
+                     f"{residual[worst]:.3g} x tolerance); their results are the closest found "
+                     "(variables converged, residual)")
     # one note per kind of solver message (messages differing only in numbers are one kind)
     groups: dict[str, list[str]] = {}
     for message in filter(None, str(result.attrs.get("messages", "")).split("\n")):

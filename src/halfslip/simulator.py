@@ -125,8 +125,8 @@ def slip_zone_spacings(ds: xr.Dataset, nodes: int) -> float:
 
 
 def _dtype(name: str):
-    """Storage type of a per-step column: the regime code is int8, the rest float."""
-    return np.int8 if name == "regime" else float
+    """Storage type of a per-step column: the regime code and the converged flag are int8, the rest float."""
+    return np.int8 if name in ("regime", "converged") else float
 
 
 class _Records:
@@ -137,7 +137,7 @@ class _Records:
     """
 
     names = ("t", "P", "Q", "M", "sigma", "contact_left", "contact_right",
-             "stick_left", "stick_right", "regime", "shift", "dissipation")
+             "stick_left", "stick_right", "regime", "shift", "dissipation", "converged", "residual")
 
     def __init__(self):
         self.chunks = {k: [] for k in self.names}
@@ -150,7 +150,7 @@ class _Records:
                 self.chunks[k].append(np.asarray(self.buffer[k], _dtype(k)))
                 self.buffer[k] = []
 
-    def add(self, state: ContactState, regime: Regime):
+    def add(self, state: ContactState, regime: Regime, converged: bool = True, residual: float = 0.0):
         c = self.buffer
         c["t"].append(state.t)
         for k, v in zip(("P", "Q", "M", "sigma"), state.loads):
@@ -162,12 +162,16 @@ class _Records:
         c["regime"].append(int(regime))
         c["shift"].append(state.shift)
         c["dissipation"].append(state.dissipation)
+        c["converged"].append(int(converged))
+        c["residual"].append(residual)
 
     def add_steps(self, steps: dict, mask: np.ndarray):
         """Append the masked entries of per-step arrays (keys as ``names``)."""
         self._flush()
+        n = len(mask)
+        defaults = {"converged": np.ones(n, np.int8), "residual": np.zeros(n)}  # an exact marcher: always met
         for k in self.names:
-            self.chunks[k].append(np.asarray(steps[k], _dtype(k))[mask])
+            self.chunks[k].append(np.asarray(steps.get(k, defaults.get(k)), _dtype(k))[mask])
 
     def add_fields(self, values: dict):
         for k, v in values.items():
@@ -319,16 +323,16 @@ class _Run:
         self.i = 0
         self.state = self.solver.initial_state(float(h.t[0]))
         self.rec = _Records()
-        self.counters = {"steps": 0, "stick_steps": 0, "slip_solves": 0, "normal_solves": 0}
+        self.counters = {"steps": 0, "stick_steps": 0, "slip_solves": 0, "normal_solves": 0, "failed_steps": 0}
         self.messages: list[str] = []
         self.skipper = CycleSkipper(h, self.solver) if scene.solver.skip_steady_cycles else None
         self.elapsed_before = 0.0
         # compiled marching of many steps at once where the solver offers it (extents only)
-        self.chunked = not fields and getattr(self.solver, "can_march", False)
+        self.chunked = not fields and self.solver.can_march
         self._store(Regime.SEPARATED)
 
-    def _store(self, regime: Regime) -> None:
-        self.rec.add(self.state, regime)
+    def _store(self, regime: Regime, converged: bool = True, residual: float = 0.0) -> None:
+        self.rec.add(self.state, regime, converged, residual)
         if self.save.fields:
             self.rec.add_fields(_fields(self.solver, self.state, self.save))
 
@@ -347,6 +351,7 @@ class _Run:
         c["slip_solves"] += report.slipped
         c["stick_steps"] += report.regime == Regime.STICK
         c["normal_solves"] += report.normal_solved
+        c["failed_steps"] += not report.converged
         if report.message and report.message not in self.messages:
             self.messages.append(report.message)
         jumped = False
@@ -357,8 +362,8 @@ class _Run:
                 i, state = jump
                 jumped = True
         self.i, self.state = i, state
-        if self.save.stored(i, n) or jumped:
-            self._store(report.regime)
+        if self.save.stored(i, n) or jumped or not report.converged:  # a failed step is always stored
+            self._store(report.regime, report.converged, report.residual)
 
     def _advance_chunk(self) -> None:
         h = self.scene.history
@@ -407,7 +412,7 @@ class _Run:
                 "steps_done": self.i,
                 "friction": scene.friction,
                 "compliance": scene.material.compliance,
-                "shift_datum": getattr(self.solver, "datum", float("nan")),
+                "shift_datum": self.solver.datum,
                 "wall_time": self.elapsed_before + elapsed,
                 "messages": "\n".join(self.messages),
                 "skipped_cycles": 0 if self.skipper is None else self.skipper.total,
@@ -512,12 +517,12 @@ class CycleSkipper:
     """
 
     def __init__(self, history, solver):
-        self.same = getattr(solver, "same_state", None)
+        self.same = solver.same_state
         # a solver whose states agree only to a tolerance also asks that the cycle's stick
         # edges repeat, step by step, to ``cycle_tolerance(state)`` [m]: a difference that
         # the memory at the cycle's end hides (a slip zone that reached less far at a peak
         # in a narrow strip) shows there
-        self.tolerance = getattr(solver, "cycle_tolerance", None)
+        self.tolerance = solver.cycle_tolerance
         self.ends = {}  # step index of a cycle end -> (segment index, segment)
         self.segment_of = []  # (start, stop, segment index) of the cycles segments
         self._sorted_ends = None
@@ -571,7 +576,7 @@ class CycleSkipper:
 
     def check(self, i: int, state: ContactState):
         """Return (new index, new state) when the rest of the segment is skipped."""
-        if self.same is None or i not in self.ends:
+        if i not in self.ends:
             return None
         k, seg = self.ends[i]
         prev = self.previous.get(k)
@@ -617,6 +622,8 @@ _META = {
     "p": ("Pa", "contact pressure"),
     "q": ("Pa", "shear traction exerted by the pad on the substrate"),
     "slip": ("m", "accumulated slip since the point entered contact"),
+    "converged": ("1", "whether the step met the method's own tolerance (1) or not (0)"),
+    "residual": ("1", "violation of the step's checks relative to their tolerance (<= 1 when converged)"),
 }
 
 

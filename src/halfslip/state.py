@@ -55,12 +55,23 @@ class StepReport:
         or the method needs no normal solve).
     message : str
         Anything the user should hear about, e.g. a clamped shear force.
+    converged : bool
+        Whether the method met its own tolerance in this step. A step that did
+        not is still returned (with the best state the method found) and is
+        recorded as such in the result (``converged`` = 0); it never drives
+        control flow through its message.
+    residual : float
+        The method's measure of how far the step's answer is from meeting its
+        checks, relative to their tolerance (<= 1 when converged; 0 for an exact
+        method).
     """
 
     regime: Regime
     slipped: bool
     normal_solved: bool
     message: str = ""
+    converged: bool = True
+    residual: float = 0.0
 
 
 @dataclass(frozen=True)

@@ -42,6 +42,7 @@ import numpy as np
 
 from ..geometry import NormalProblem
 from ..state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime, StepReport
+from .base import TangentialSolver
 from .levels import HertzLevels, LevelIntegrals, level_integrals
 
 _EPS = np.finfo(float).eps
@@ -96,7 +97,7 @@ class _Trial:
     C: list
 
 
-class ExactMemory:
+class ExactMemory(TangentialSolver):
     """Tangential solver: exact memory of load levels (symmetric, M = sigma = 0).
 
     Parameters

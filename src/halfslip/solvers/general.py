@@ -47,6 +47,7 @@ import numpy as np
 
 from ..geometry import NormalProblem, NormalSolution, RoundedPunch, TabulatedProfile
 from ..state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime, StepReport
+from .base import TangentialSolver
 from . import _general_points as pts
 from . import _general_sie as sie
 from ._general_path import EdgePath, arrival_strains, outside_strain
@@ -196,7 +197,7 @@ class _Data:
         return self.E + sol.gauge * self.gauge * on, self.kappa + sol.gauge * self.kappa_gauge * on
 
 
-class GeneralSolver:
+class GeneralSolver(TangentialSolver):
     """Tangential solver for any profile and all four loads varying.
 
     Parameters
@@ -285,7 +286,9 @@ class GeneralSolver:
         new, second = self._step(half, t1, loads1, splits - 1)
         message = "; ".join(m for m in (first.message, second.message) if m)
         return new, StepReport(second.regime, first.slipped or second.slipped,
-                               first.normal_solved or second.normal_solved, message)
+                               first.normal_solved or second.normal_solved, message,
+                               converged=first.converged and second.converged,
+                               residual=max(first.residual, second.residual))
 
     def _single(self, state: ContactState, t1: float, loads1: Loads):
         """One straight step, without splitting.
@@ -344,20 +347,20 @@ class GeneralSolver:
                         RECEDING_STICK_TOL * problem.p_scale:
                     chosen = (sol, shear)
         slipped = chosen is None
-        message = ""
+        message, converged, residual = "", True, 0.0
         if slipped:
             self.counters["slip_solves"] += 1
-            chosen, message = self._slip_solve(problem, data, mem, N1, edges1)
+            chosen, message, converged, residual = self._slip_solve(problem, data, mem, N1, edges1)
         sol, shear = chosen
         self.counters["evaluations"] += problem.evaluations
-        split = bool(message)
+        split = not converged
         if slipped and mem.normal is not None:
             W = N1.right - N1.left
             strips = (mem.normal.left - N1.left, N1.right - mem.normal.right)
             split |= any(s == 0 and strip > MAX_STRIP * W for s, strip in zip((sol.config.left, sol.config.right),
                                                                                   strips))
         new, report = self._finish(state, t1, loads1, N1, data, problem, sol, shear, slipped, normal_changed,
-                                   message, edges1)
+                                   message, edges1, converged, residual)
         if self.edge_travel is not None and slipped and mem.normal is not None:
             # step-size control: a slipping step whose stick edges travel further than
             # edge_travel of the width is taken in halves (the dissipation and the arrival
@@ -444,7 +447,18 @@ class GeneralSolver:
     # -- slip -------------------------------------------------------------
     def _slip_solve(self, problem: StepProblem, data: _Data, mem: GeneralMemory, N1: NormalSolution,
                     edges1: _Edges):
-        """Try slip configurations, most likely first; return ((sol, shear), message)."""
+        """Try slip configurations, most likely first.
+
+        Returns
+        -------
+        chosen : (sol, shear)
+        message : str
+        converged : bool
+            Whether a configuration met the Coulomb and slip-direction checks.
+        residual : float
+            The chosen configuration's violation of those checks relative to their
+            tolerances (<= 1 when converged; inf when no configuration was found).
+        """
         f = self.f
         N0 = mem.normal
         options = []
@@ -474,18 +488,18 @@ class GeneralSolver:
                 shear = problem.shear(sol)
                 violation = self._violation(problem, data, sol, shear)
                 if violation <= 1.0:
-                    return (sol, shear), ""
+                    return (sol, shear), "", True, violation
                 if violation < best_violation:
                     best, best_violation = (sol, shear), violation
         if best is None:
             sol = problem.solve(Config(0, 0))
             shear = problem.shear(sol)
             return (sol, shear), ("slip solve: no slip-zone configuration converged; kept full stick "
-                                  f"(Coulomb excess {self._coulomb(problem, shear):.2g} of f max p)")
+                                  f"(Coulomb excess {self._coulomb(problem, shear):.2g} of f max p)"), False, math.inf
         return best, (
             "slip solve: no slip-zone configuration met the Coulomb and slip-direction checks; "
             f"kept the closest (violation {best_violation:.2g} x tolerance)"
-        )
+        ), False, best_violation
 
     def _coulomb(self, problem: StepProblem, shear: Shear) -> float:
         """Largest excess of abs(q) over f p on the stick interval, relative to f max p.
@@ -557,7 +571,8 @@ class GeneralSolver:
         return E_end, dg, tuple(edges)
 
     # -- finishing a step ---------------------------------------------------
-    def _finish(self, state, t1, loads1, N1, data, problem, sol, shear, slipped, normal_changed, message, edges1):
+    def _finish(self, state, t1, loads1, N1, data, problem, sol, shear, slipped, normal_changed, message, edges1,
+                converged=True, violation=0.0):
         mem = state.memory
         f = self.f
         cfg = sol.config
@@ -598,7 +613,7 @@ class GeneralSolver:
         stick = (L1, R1) if regime == Regime.STICK else (b1, b2)
         new = ContactState(float(t1), loads1, L1, R1, stick[0], stick[1], shift, state.dissipation + dissipation,
                            new_mem)
-        return new, StepReport(regime, slipped, normal_changed, message)
+        return new, StepReport(regime, slipped, normal_changed, message, converged=converged, residual=violation)
 
     def _clusters(self, data: _Data, E_start, kappa, b_left, b_right, N1):
         """Drop cluster points inside the slip zones and lay new ones at the stick edges.

@@ -1,0 +1,66 @@
+"""The step contract (solvers/base.py): every method is a TangentialSolver, every step says
+whether it met its tolerance, and the result records it (issue 14, item 3)."""
+from __future__ import annotations
+
+import textwrap
+
+import numpy as np
+import pytest
+
+import halfslip as hs
+from halfslip.cli import summarize
+from halfslip.solvers.base import TangentialSolver
+from halfslip.solvers.exact import ExactMemory
+from halfslip.solvers.general import GeneralSolver
+
+SCENE = textwrap.dedent("""
+    name: contract
+    material: {E: 200.0e9, nu: 0.3}
+    friction: 0.6
+    geometry: {kind: hertz, radius: 50.0e-3}
+    loads:
+      - ramp: {to: {P: 1.0e5}, duration: 1.0, steps: 4}
+      - ramp: {to: {Q: 4.0e4, sigma: 2.0e7}, duration: 1.0, steps: 12}
+    solver: {method: general, nodes: 64}
+    output: {every: 100}
+""")
+
+
+def test_both_methods_keep_the_contract():
+    assert issubclass(ExactMemory, TangentialSolver) and issubclass(GeneralSolver, TangentialSolver)
+    assert GeneralSolver.cycle_tolerance is not None and TangentialSolver.cycle_tolerance is None
+
+
+def test_converged_steps_are_recorded(tmp_path):
+    scene = hs.parse_scene(SCENE)
+    ds = hs.simulate(scene)
+    assert ds.attrs["count_failed_steps"] == 0
+    assert ds["converged"].dtype == np.int8 and np.all(ds["converged"].values == 1)
+    assert np.all(ds["residual"].values <= 1.0)
+    assert ds["converged"].attrs["units"] == "1" and ds["residual"].attrs["long_name"]
+
+
+def test_a_failed_step_is_stored_counted_and_summarised(monkeypatch, tmp_path):
+    """A step the solver could not solve to its tolerance is kept in the result whatever
+    output.every says, counted, and named in the summary: it never looks like a right one."""
+    original = GeneralSolver._slip_solve
+    calls = []
+
+    def failing_once(self, *args):
+        chosen, message, converged, violation = original(self, *args)
+        calls.append(1)
+        if len(calls) == 3:  # the third slip solve of the run: say it missed its checks
+            return chosen, "forced", False, 7.5
+        return chosen, message, converged, violation
+
+    monkeypatch.setattr(GeneralSolver, "_slip_solve", failing_once)
+    monkeypatch.setattr("halfslip.solvers.general.MAX_SPLITS", 0)  # no splitting: the failure stays
+    scene = hs.parse_scene(SCENE)
+    ds = hs.simulate(scene)
+    assert len(calls) > 3
+    assert ds.attrs["count_failed_steps"] == 1
+    bad = ds["converged"].values == 0
+    assert bad.sum() == 1 and ds["residual"].values[bad][0] == pytest.approx(7.5)
+    assert ds.sizes["t"] == 3  # the initial state, the failed step (off the every-100 grid), the last step
+    text = "\n".join(summarize(ds, tmp_path / "x.h5"))
+    assert "NOT CONVERGED: 1 of 16 steps" in text and "7.5 x tolerance" in text
