@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from . import geometry
+from . import geometry, io, limits
 from .errors import (
     HalfslipInputError,
     check_bool,
@@ -34,6 +34,7 @@ from .errors import (
     check_mapping,
     check_number,
     check_string,
+    excerpt,
     join,
 )
 from .histories import LoadHistory, check_column, read_csv_columns
@@ -207,17 +208,12 @@ def load_scene(path: str | os.PathLike) -> Scene:
 
 
 def read_input_text(path: Path, what: str) -> str:
-    """The UTF-8 text of an input file, or a one-line HalfslipInputError naming it."""
-    try:
-        return path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise HalfslipInputError("no such file", file=str(path)) from None
-    except IsADirectoryError:
-        raise HalfslipInputError(f"is a directory, not a {what} file", file=str(path)) from None
-    except UnicodeDecodeError:
-        raise HalfslipInputError("is not UTF-8 text", file=str(path)) from None
-    except OSError as error:
-        raise HalfslipInputError(f"cannot read: {error.strerror}", file=str(path)) from None
+    """The UTF-8 text of a scene or sweep file, or a one-line HalfslipInputError naming it.
+
+    :func:`halfslip.io.read_input_text` with the limit of YAML files
+    (:data:`halfslip.limits.MAX_SCENE_BYTES`).
+    """
+    return io.read_input_text(path, what, limits.MAX_SCENE_BYTES)
 
 
 def parse_scene(
@@ -301,7 +297,8 @@ def _build_profile(spec: Any, base: Path) -> Any:
     if "file" in spec:
         check_mapping(spec, "geometry", ("kind", "file"))
         name = check_string(spec["file"], "geometry.file")
-        columns, _ = read_csv_columns(base / name, ("x", "h"), ("x", "h"), "geometry")
+        columns, _ = read_csv_columns(base / name, ("x", "h"), ("x", "h"), "geometry", what="profile",
+                                      max_rows=limits.MAX_PROFILE_ROWS)
         return _make(geometry.TabulatedProfile, "geometry.file", columns["x"], columns["h"])
     check_mapping(spec, "geometry", ("kind", "x", "h"), ("x", "h"))
     x, h = check_column(spec["x"], "geometry.x"), check_column(spec["h"], "geometry.h")
@@ -358,7 +355,7 @@ def _plain(node: yaml.Node, path: str, lines: dict[str, int], loader: yaml.SafeL
             key = key_node.value
             child = join(path, key)
             if key in result:
-                raise HalfslipInputError(f"duplicate key {key!r}", line=line, field=child)
+                raise HalfslipInputError(f"duplicate key {excerpt(key)}", line=line, field=child)
             lines[child] = line
             result[key] = _plain(value_node, child, lines, loader)
         return result
