@@ -317,47 +317,143 @@ def _make(factory: Any, field: str, *parameters: Any) -> Any:
 
 # -- YAML with line numbers ------------------------------------------------
 
+_INT_TAG = "tag:yaml.org,2002:int"
+_FLOAT_TAG = "tag:yaml.org,2002:float"
+_MERGE_TAG = "tag:yaml.org,2002:merge"
+_FLOAT_BITS = 1024  # 2**1024 is the first integer beyond the largest float (1.8e308)
+
+
+def _yaml_error(message: str, mark: Any) -> HalfslipInputError:
+    """An error of the YAML text at `mark` (a PyYAML mark or None)."""
+    return HalfslipInputError(message, line=mark.line + 1 if mark is not None else None)
+
+
+class _BoundedLoader(yaml.SafeLoader):
+    """PyYAML's safe loader, composing within :mod:`halfslip.limits`.
+
+    While the node tree is composed it counts the nodes the tree expands to
+    (an alias counts as the whole of its anchor, so "billion laughs" is
+    refused after MAX_YAML_NODES nodes, not after gigabytes), the depth of
+    nesting (aliases counted expanded; checked before each level is entered,
+    so the recursion never goes deeper than MAX_YAML_DEPTH), and refuses an
+    alias to a node that contains it (a cycle, which the walk in
+    :func:`_plain` would follow forever).
+    """
+
+    def __init__(self, text: str) -> None:
+        super().__init__(text)
+        self.expanded = 0  # nodes the tree expands to, so far
+        self.depth = 0  # nesting of the node being composed
+        self.deepest = 0  # deepest (expanded) level met in the current subtree
+        self.open_anchors: set[str] = set()
+        self.anchor_sizes: dict[str, tuple[int, int]] = {}  # anchor -> (expanded nodes, height)
+
+    def _grow(self, nodes: int, depth: int, mark: Any) -> None:
+        self.expanded += nodes
+        self.deepest = max(self.deepest, depth)
+        if self.expanded > limits.MAX_YAML_NODES:
+            raise _yaml_error(
+                f"the YAML expands to more than {limits.MAX_YAML_NODES:,} values (every alias counted in full); "
+                "a scene needs a few hundred (halfslip.limits.MAX_YAML_NODES)", mark)
+        if depth > limits.MAX_YAML_DEPTH:
+            raise _yaml_error(
+                f"lists and mappings nest deeper than {limits.MAX_YAML_DEPTH} levels (aliases counted expanded); "
+                "a scene nests 5 (halfslip.limits.MAX_YAML_DEPTH)", mark)
+
+    def compose_node(self, parent: Any, index: Any) -> Any:
+        event = self.peek_event()
+        if isinstance(event, yaml.AliasEvent):
+            if event.anchor in self.open_anchors:
+                raise _yaml_error(f"the alias *{excerpt(event.anchor)[1:-1]} refers to a node that contains it "
+                                  "(a cycle)", event.start_mark)
+            node = super().compose_node(parent, index)  # PyYAML refuses an undefined alias
+            nodes, height = self.anchor_sizes.get(event.anchor, (1, 1))
+            self._grow(nodes, self.depth + height, event.start_mark)
+            return node
+        anchor = getattr(event, "anchor", None)
+        before, outer_deepest = self.expanded, self.deepest
+        self.depth += 1
+        self.deepest = self.depth
+        self._grow(1, self.depth, event.start_mark)
+        if anchor is not None:
+            self.open_anchors.add(anchor)
+        node = super().compose_node(parent, index)
+        if anchor is not None:
+            self.open_anchors.discard(anchor)
+            self.anchor_sizes[anchor] = (self.expanded - before, self.deepest - self.depth + 1)
+        self.depth -= 1
+        self.deepest = max(outer_deepest, self.deepest)
+        return node
+
 
 def _read_yaml(text: str) -> tuple[Any, dict[str, int]]:
     """Parse YAML safely into plain data and a table field path -> line.
 
     The line of a mapping entry is the line of its key; of a list item, the
-    line where the item starts; the top level is ``""``.
+    line where the item starts; the top level is ``""``. The YAML may use
+    anchors, aliases and merge keys (``<<: *defaults``) within the limits of
+    :class:`_BoundedLoader`; every failure is a one-line HalfslipInputError.
     """
-    loader = yaml.SafeLoader(text)
+    loader = None
     try:
+        loader = _BoundedLoader(text)  # the reader refuses non-printable characters here already
         root = loader.get_single_node()
         lines: dict[str, int] = {}
         if root is None:
             return None, lines
         lines[""] = root.start_mark.line + 1
         return _plain(root, "", lines, loader), lines
+    except yaml.reader.ReaderError as error:
+        where = text.count("\n", 0, error.position) + 1 if isinstance(error.position, int) else None
+        character = chr(error.character) if isinstance(error.character, int) else str(error.character)
+        raise HalfslipInputError(
+            f"invalid YAML: the character {excerpt(character)} (#x{ord(character[:1] or ' '):04x}) is not allowed "
+            "in a YAML file; remove it", line=where) from None
     except yaml.MarkedYAMLError as error:
         mark = error.problem_mark or error.context_mark
         reason = "; ".join(part for part in (error.context, error.problem) if part)
         if error.context_mark is not None and mark is not None and error.context_mark.line != mark.line:
             reason += f" (the construct began on line {error.context_mark.line + 1})"
-        raise HalfslipInputError(f"invalid YAML: {reason}", line=mark.line + 1 if mark else None) from None
+        raise HalfslipInputError(f"invalid YAML: {excerpt(reason, 200)[1:-1]}",
+                                 line=mark.line + 1 if mark else None) from None
     except yaml.YAMLError as error:
-        raise HalfslipInputError(f"invalid YAML: {error}") from None
+        raise HalfslipInputError(f"invalid YAML: {excerpt(error, 200)[1:-1]}") from None
     finally:
-        loader.dispose()
+        if loader is not None:
+            loader.dispose()
 
 
 def _plain(node: yaml.Node, path: str, lines: dict[str, int], loader: yaml.SafeLoader) -> Any:
-    """Convert a YAML node to plain Python, recording the line of every field."""
+    """Convert a YAML node to plain Python, recording the line of every field.
+
+    The recursion is as deep as the nesting, which the loader has bounded.
+    """
     if isinstance(node, yaml.MappingNode):
         result = {}
+        merged = []
         for key_node, value_node in node.value:
             line = key_node.start_mark.line + 1
             if not isinstance(key_node, yaml.ScalarNode):
                 raise HalfslipInputError("keys must be plain names", line=line, field=path or None)
+            if key_node.tag == _MERGE_TAG:
+                merged.append((value_node, line))
+                continue
             key = key_node.value
             child = join(path, key)
             if key in result:
                 raise HalfslipInputError(f"duplicate key {excerpt(key)}", line=line, field=child)
             lines[child] = line
             result[key] = _plain(value_node, child, lines, loader)
+        for value_node, line in merged:  # '<<: *a' or '<<: [*a, *b]': keys not given explicitly, first wins
+            sources = value_node.value if isinstance(value_node, yaml.SequenceNode) else [value_node]
+            for source in sources:
+                if not isinstance(source, yaml.MappingNode):
+                    raise HalfslipInputError("a merge key (<<) takes a mapping or a list of mappings",
+                                             line=line, field=path or None)
+                for key, value in _plain(source, path, {}, loader).items():
+                    if key not in result:
+                        lines.setdefault(join(path, key), line)
+                        result[key] = value
         return result
     if isinstance(node, yaml.SequenceNode):
         items = []
@@ -366,8 +462,25 @@ def _plain(node: yaml.Node, path: str, lines: dict[str, int], loader: yaml.SafeL
             lines[child] = item.start_mark.line + 1
             items.append(_plain(item, child, lines, loader))
         return items
-    value = loader.construct_object(node)
-    if isinstance(value, str) and node.style is None:
+    return _scalar(node, path, loader)
+
+
+def _scalar(node: yaml.ScalarNode, path: str, loader: yaml.SafeLoader) -> Any:
+    """A scalar node's value; numbers out of the float range are refused here."""
+    line = node.start_mark.line + 1
+    if node.tag in (_INT_TAG, _FLOAT_TAG) and len(node.value) > limits.MAX_NUMBER_DIGITS:
+        raise HalfslipInputError(
+            f"a number of {len(node.value):,} characters: at most {limits.MAX_NUMBER_DIGITS} are read "
+            "(the largest number is 1.8e308)", line=line, field=path or None)
+    try:
+        value = loader.construct_object(node)
+    except (ValueError, OverflowError, ArithmeticError) as error:  # e.g. the date 2024-13-45
+        raise HalfslipInputError(f"cannot read {excerpt(node.value)}: {excerpt(error, 80)[1:-1]}",
+                                 line=line, field=path or None) from None
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value).bit_length() > _FLOAT_BITS:
+        raise HalfslipInputError(f"{excerpt(node.value)} is out of range; the largest number is 1.8e308",
+                                 line=line, field=path or None)
+    if isinstance(value, str) and node.style is None and len(value) <= limits.MAX_NUMBER_DIGITS:
         try:
             return float(value)
         except ValueError:
