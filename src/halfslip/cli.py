@@ -13,8 +13,8 @@ import click
 
 from . import __version__
 from .errors import HalfslipInputError
-from .geometry import Hertz, RoundedPunch, TabulatedProfile
-from .scene import Scene, load_scene
+from .geometry import Hertz, ProfileSpanError, RoundedPunch, TabulatedProfile
+from .scene import Scene, load_scene, scene_error
 
 EXIT_INPUT_ERROR = 2
 """Exit status for bad input (the same status click uses for usage errors)."""
@@ -194,6 +194,12 @@ def run(scene_file: str, output: str | None, method: str | None, nodes: int | No
                           stop_requested=lambda: bool(stop))
     except MethodError as error:
         raise HalfslipInputError(str(error), file=str(scene.path) if scene.path else None, field="solver.method") from None
+    except ProfileSpanError as error:  # loads the scene check did not foresee (check_contacts)
+        raise scene_error(scene, f"the profile cannot carry the loads: {error}", "geometry") from None
+    except HalfslipInputError as error:  # e.g. --method / --nodes make the run too large
+        if error.file is not None:
+            raise
+        raise scene_error(scene, error.message, error.field or "") from None
     finally:
         progress.close()
         for sig, handler in handlers.items():
@@ -279,7 +285,10 @@ def steady(scene_file: str, segment: int | None, output: str | None) -> None:
     from .steady import steady_state
 
     scene = load_scene(scene_file)
-    ds = steady_state(scene, segment)
+    try:
+        ds = steady_state(scene, segment)
+    except ProfileSpanError as error:
+        raise scene_error(scene, f"the profile cannot carry the loads: {error}", "geometry") from None
     regime = int(ds["regime"])
     names = {1: "full stick (shakedown)", 2: "partial slip", 3: "gross sliding"}
     rows = [

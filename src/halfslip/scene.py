@@ -158,6 +158,7 @@ class Scene:
             raise HalfslipInputError(f"Poisson's ratio must lie in (-1, 0.5), got {nu:g}", field="material.nu")
         object.__setattr__(self, "material", geometry.Material(E=E, nu=nu))
         object.__setattr__(self, "friction", check_number(self.friction, "friction", nonnegative=True))
+        check_run_bytes(self)
 
     def warnings(self) -> tuple[str, ...]:
         """Return messages about legal but physically suspect input.
@@ -183,6 +184,84 @@ class Scene:
                 f"(max |Q|/(fP) = {self.history.max_shear_ratio(self.friction):.3g}): gross sliding"
             )
         return tuple(messages)
+
+
+def run_bytes(scene: Scene, method: str | None = None) -> dict[str, int]:
+    """Estimate the memory a run of `scene` surely needs, by part [bytes].
+
+    A lower bound of what :func:`halfslip.simulate` allocates, so that a scene
+    refused for it could not have run:
+
+    - ``history``: the sampled times and four loads, 40 bytes a step;
+    - ``records``: twelve numbers per stored step (about 32 bytes each while
+      the run collects them) and the stored fields, ``len(fields) x points``
+      floats per stored step, held twice when the result is assembled. With
+      ``skip_steady_cycles`` a cycles segment stores at least two cycles;
+    - ``solver``: the general solver's working set,
+      :data:`halfslip.limits.GENERAL_BYTES_PER_NODE` per node, when the
+      general solver may be chosen.
+
+    `method` overrides ``scene.solver.method`` ('auto', 'exact', 'general').
+
+    Returns
+    -------
+    dict
+        ``{"history": ..., "records": ..., "fields": ..., "solver": ...}``.
+    """
+    history = scene.history
+    marched = 0
+    for segment in history.segments:
+        if segment.kind == "cycles" and scene.solver.skip_steady_cycles:
+            marched += min(segment.count, 2) * segment.steps_per_cycle
+        else:
+            marched += segment.steps
+    stored = -(-marched // scene.output.every) + 1
+    method = method or scene.solver.method
+    general = method == "general" or (
+        method == "auto"
+        and not (scene.profile.symmetric and not np.any(history.M) and not np.any(history.sigma))
+    )
+    return {
+        "history": 40 * history.n_steps,
+        "records": 12 * 32 * stored,
+        "fields": 2 * 8 * len(scene.output.fields) * scene.output.points * stored,
+        "solver": limits.GENERAL_BYTES_PER_NODE * scene.solver.nodes if general else 0,
+    }
+
+
+_RUN_PART_FIELDS = {"history": "loads", "records": "loads", "fields": "output.points", "solver": "solver.nodes"}
+
+
+def check_run_bytes(scene: Scene, method: str | None = None) -> None:
+    """Refuse a scene whose run would need more than :data:`halfslip.limits.MAX_RUN_BYTES`.
+
+    The error names the field of the largest part of :func:`run_bytes` and
+    gives the estimate.
+    """
+    parts = run_bytes(scene, method)
+    total = sum(parts.values())
+    if total <= limits.MAX_RUN_BYTES:
+        return
+    largest = max(parts, key=parts.__getitem__)
+    detail = ", ".join(f"{name} {_bytes_text(size)}" for name, size in parts.items() if size)
+    hint = {
+        "loads": "fewer steps, or output.every > 1",
+        "output.points": "fewer output.points, fewer output.fields, or output.every > 1",
+        "solver.nodes": "fewer solver.nodes",
+    }[_RUN_PART_FIELDS[largest]]
+    raise HalfslipInputError(
+        f"the run would need about {_bytes_text(total)} of memory ({detail}); at most "
+        f"{_bytes_text(limits.MAX_RUN_BYTES)} (halfslip.limits.MAX_RUN_BYTES): use {hint}",
+        field=_RUN_PART_FIELDS[largest],
+    )
+
+
+def _bytes_text(size: float) -> str:
+    """A byte count for messages: ``3.2 GB``."""
+    for unit, scale in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if size >= scale:
+            return f"{size / scale:.3g} {unit}"
+    return f"{int(size)} B"
 
 
 def load_scene(path: str | os.PathLike) -> Scene:
@@ -268,7 +347,7 @@ def _build_scene(data: Any, lines: Mapping[str, int], base: Path, text: str, pat
     segment_lines = (
         [lines.get(f"loads[{index}]") for index in range(len(segments))] if isinstance(segments, list) else None
     )
-    return Scene(
+    scene = Scene(
         name=data.get("name", path.stem if path is not None else "scene"),
         material=geometry.Material(E=material["E"], nu=material["nu"]),
         friction=data["friction"],
@@ -279,6 +358,76 @@ def _build_scene(data: Any, lines: Mapping[str, int], base: Path, text: str, pat
         text=text,
         path=path,
     )
+    check_contacts(scene)
+    return scene
+
+
+def check_contacts(scene: Scene) -> None:
+    """Check that the contact fits a tabulated profile under the history's extreme loads.
+
+    The normal problem is solved at the sampled points of largest P, largest
+    and smallest M and largest and smallest M/P (and, when the exact method
+    may serve the scene, at the 5 % higher load up to which it tabulates the
+    contact). A contact that would leave the tabulated span, or none found,
+    is an error of ``geometry``, foreseen here instead of in the middle of a
+    run. Analytic profiles extend without end and are not checked.
+    """
+    profile = scene.profile
+    if not isinstance(profile, geometry.TabulatedProfile):
+        return
+    history = scene.history
+    P, M = history.P, history.M
+    loaded = np.flatnonzero(P > 0.0)
+    if loaded.size == 0:
+        return
+    ratio = M[loaded] / P[loaded]
+    candidates = dict.fromkeys(
+        int(index) for index in (
+            loaded[np.argmax(P[loaded])], loaded[np.argmax(M[loaded])], loaded[np.argmin(M[loaded])],
+            loaded[np.argmax(ratio)], loaded[np.argmin(ratio)],
+        )
+    )
+    from .solvers.levels import TABLE_HEADROOM
+
+    problem = geometry.NormalProblem(profile, scene.material.compliance)
+    try:
+        for index in candidates:
+            at = f"P = {P[index]:g} N/m, M = {M[index]:g} N (t = {history.t[index]:g} s)"
+            problem.solve(float(P[index]), float(M[index]))
+        if scene.solver.method != "general" and profile.symmetric and not np.any(M) and not np.any(history.sigma):
+            top = TABLE_HEADROOM * float(np.max(P))
+            at = f"P = {top:g} N/m ({TABLE_HEADROOM:g} x the largest P, to which the exact method tabulates)"
+            problem.half_width(np.array([top]))
+    except geometry.ProfileSpanError as error:
+        source = scene_profile_source(scene)
+        source = f" {source}" if source else ""
+        raise HalfslipInputError(
+            f"the profile{source} cannot carry {at}: {error}", field="geometry"
+        ) from None
+
+
+def scene_error(scene: Scene, message: str, field: str) -> HalfslipInputError:
+    """An error of `field` of a loaded scene, located at its file and line."""
+    line = None
+    if scene.text is not None:
+        try:
+            line = _line_of(field, _read_yaml(scene.text)[1])
+        except HalfslipInputError:
+            pass
+    return HalfslipInputError(message, file=str(scene.path) if scene.path is not None else None, line=line,
+                              field=field)
+
+
+def scene_profile_source(scene: Scene) -> str | None:
+    """The profile file named by the scene's text, if any (for messages)."""
+    if scene.text is None:
+        return None
+    try:
+        data, _ = _read_yaml(scene.text)
+        name = data["geometry"]["file"]
+    except (HalfslipInputError, KeyError, TypeError):
+        return None
+    return excerpt(name, io.PATH_CHARS) if isinstance(name, str) else None
 
 
 def _build_profile(spec: Any, base: Path) -> Any:
@@ -297,14 +446,63 @@ def _build_profile(spec: Any, base: Path) -> Any:
     if "file" in spec:
         check_mapping(spec, "geometry", ("kind", "file"))
         name = check_string(spec["file"], "geometry.file")
-        columns, _ = read_csv_columns(base / name, ("x", "h"), ("x", "h"), "geometry", what="profile",
-                                      max_rows=limits.MAX_PROFILE_ROWS)
-        return _make(geometry.TabulatedProfile, "geometry.file", columns["x"], columns["h"])
+        path = base / name
+        columns, row_lines = read_csv_columns(path, ("x", "h"), ("x", "h"), "geometry", what="profile",
+                                              max_rows=limits.MAX_PROFILE_ROWS)
+
+        def at_row(message: str, column: str, row: int) -> HalfslipInputError:
+            return HalfslipInputError(message, file=str(path), line=row_lines[row], field=f"geometry.{column}")
+
+        return _profile_from_samples(columns["x"], columns["h"], at_row, "geometry.file")
     check_mapping(spec, "geometry", ("kind", "x", "h"), ("x", "h"))
+    for column in ("x", "h"):
+        if isinstance(spec[column], list) and len(spec[column]) > limits.MAX_PROFILE_ROWS:
+            raise HalfslipInputError(
+                f"has {len(spec[column]):,} values; a profile has at most {limits.MAX_PROFILE_ROWS:,} samples "
+                "(halfslip.limits.MAX_PROFILE_ROWS)", field=f"geometry.{column}")
     x, h = check_column(spec["x"], "geometry.x"), check_column(spec["h"], "geometry.h")
     if x.size != h.size:
         raise HalfslipInputError(f"has {h.size} values but x has {x.size}", field="geometry.h")
-    return _make(geometry.TabulatedProfile, "geometry", x, h)
+
+    def at_item(message: str, column: str, row: int) -> HalfslipInputError:
+        return HalfslipInputError(message, field=f"geometry.{column}[{row}]")
+
+    return _profile_from_samples(x, h, at_item, "geometry")
+
+
+PROFILE_DIP_RTOL = 1e-6
+"""How far below h(0) a profile sample may lie, relative to the profile's height
+range: a measured profile's lowest point may sit a little off x = 0 within its
+noise; deeper, the first contact would start away from x = 0 (or nowhere, for a
+concave profile), which the normal problem cannot solve."""
+
+
+def _profile_from_samples(x: np.ndarray, h: np.ndarray, at_row: Any, field: str) -> geometry.TabulatedProfile:
+    """Build a tabulated profile, naming the offending row of a bad sample.
+
+    ``at_row(message, column, row)`` makes the located error. Beyond the
+    checks of :class:`~halfslip.geometry.TabulatedProfile` the gap must be
+    lowest at x = 0, where the pad first touches (within PROFILE_DIP_RTOL).
+    """
+    if x.size >= 2:
+        falling = np.flatnonzero(np.diff(x) <= 0.0)
+        if falling.size:
+            row = int(falling[0]) + 1
+            raise at_row(f"x must increase strictly; {x[row]:g} follows {x[row - 1]:g}", "x", row)
+        if not x[0] < 0.0:
+            raise at_row(f"the samples must reach both sides of x = 0; the first x is {x[0]:g}", "x", 0)
+        if not x[-1] > 0.0:
+            raise at_row(f"the samples must reach both sides of x = 0; the last x is {x[-1]:g}", "x", x.size - 1)
+    profile = _make(geometry.TabulatedProfile, field, x, h)
+    height = float(np.max(profile.h) - np.min(profile.h))
+    lowest = int(np.argmin(profile.h))
+    if profile.h[lowest] < -PROFILE_DIP_RTOL * height:
+        raise at_row(
+            f"the gap at x = {x[lowest]:g} m is {-profile.h[lowest]:g} m below its value at x = 0; the profile "
+            "must be lowest at x = 0, where it first touches (a convex pad: shift x so that its lowest point is at 0)",
+            "h", lowest,
+        )
+    return profile
 
 
 def _make(factory: Any, field: str, *parameters: Any) -> Any:

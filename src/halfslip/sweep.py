@@ -480,6 +480,9 @@ def _build_sweep(data: Any, lines: dict[str, int], base: Path, text: str, path: 
                     raise HalfslipInputError(f"value {_short(_text(value))} is listed twice", field=f"{field}[{i}]")
                 seen.add(marker)
             axes.append(tuple(values))
+            cases = math.prod(len(values) for values in axes)  # exact integers: no overflow
+            if cases > limits.MAX_SWEEP_CASES:
+                raise _too_many_cases(cases, field)
         sweep = Sweep("grid", tuple(paths), tuple(axes), (), fixed, per_cycle, scene_path, scene_text,
                       scene_data, path, text, lines)
     else:
@@ -488,6 +491,8 @@ def _build_sweep(data: Any, lines: dict[str, int], base: Path, text: str, path: 
             raise HalfslipInputError(
                 f"expected a list of mappings path -> value, got {describe(cases)}", field="cases"
             )
+        if len(cases) > limits.MAX_SWEEP_CASES:
+            raise _too_many_cases(len(cases), "cases")
         checked, paths = [], {}
         for index, case in enumerate(cases):
             field = f"cases[{index}]"
@@ -500,6 +505,19 @@ def _build_sweep(data: Any, lines: dict[str, int], base: Path, text: str, path: 
     _check_overlaps(sweep)
     _check_paths_exist(sweep)
     return sweep
+
+
+CASE_BYTES = 200
+"""Memory of one case in a sweep result: about ten numbers and a status text."""
+
+
+def _too_many_cases(count: int, field: str) -> HalfslipInputError:
+    """The error of a sweep with more than MAX_SWEEP_CASES cases, with its memory estimate."""
+    return HalfslipInputError(
+        f"the sweep would have {count:,} cases (a result of about {count * CASE_BYTES / 1e9:.3g} GB, and a run "
+        f"each); at most {limits.MAX_SWEEP_CASES:,} (halfslip.limits.MAX_SWEEP_CASES)",
+        field=field,
+    )
 
 
 def _check_path(key: Any, field: str) -> str:
@@ -527,6 +545,8 @@ def _values(spec: Any, field: str) -> list[Any]:
         start = check_number(args[0], f"{where}[0]")
         stop = check_number(args[1], f"{where}[1]")
         count = check_count(args[2], f"{where}[2]")
+        if count > limits.MAX_SWEEP_CASES:  # before numpy allocates the values
+            raise _too_many_cases(count, f"{where}[2]")
         if kind == "linspace":
             return [float(v) for v in np.linspace(start, stop, count)]
         if not (start > 0 and stop > 0):
