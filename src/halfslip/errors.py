@@ -256,7 +256,7 @@ def check_mapping(
     for key in value:
         if key not in allowed:
             raise HalfslipInputError(
-                f"unknown key {excerpt(key)}{suggest(key, allowed)}", field=join(field, str(key)[:EXCERPT_CHARS])
+                f"unknown key {excerpt(key)}{suggest(key, allowed)}", field=join(field, str(key))
             )
     for key in required:
         if key not in value:
