@@ -367,8 +367,10 @@ _CONTROL = [chr(c) for c in (0, 1, 7, 8, 0x0B, 0x0C, 0x1B, 0x7F, 0x85, 0x2028, 0
 @st.composite
 def yaml_value(draw, anchors: list, depth: int = 0) -> str:
     """One flow-style YAML value: may define anchors, use aliases and merge keys, nest deep."""
-    choices = ["number", "huge", "text", "control", "alias", "list", "mapping", "deep"]
+    choices = ["number", "huge", "text", "control", "alias", "list", "mapping", "deep", "bomb"]
     kind = draw(st.sampled_from(choices if depth < 4 else choices[:5]))
+    if kind == "alias" and not anchors:
+        kind = "number"
     if kind == "number":
         text = draw(st.sampled_from(["0.5", "1e5", "-2.0e7", "0", "1e999", "0x1f", "0o17", "1_000", ".inf", "190:20:30"]))
     elif kind == "huge":
@@ -379,10 +381,10 @@ def yaml_value(draw, anchors: list, depth: int = 0) -> str:
                                      "!!binary aGVsbG8=", "!!python/name:os.system", "~"]))
     elif kind == "control":
         text = "a" + draw(st.sampled_from(_CONTROL)) + "b"
-        if draw(st.booleans()):
-            text = '"' + text.encode("unicode_escape").decode("ascii") + '"'  # escaped: a legal string
+        if draw(st.integers(0, 3)):  # mostly escaped: a legal string that carries the character
+            text = '"' + text.encode("unicode_escape").decode("ascii") + '"'
     elif kind == "alias":
-        if not anchors or draw(st.integers(0, 9)) == 0:
+        if draw(st.integers(0, 19)) == 0:
             return "*undefined"
         return "*" + draw(st.sampled_from(anchors))
     elif kind == "list":
@@ -395,10 +397,19 @@ def yaml_value(draw, anchors: list, depth: int = 0) -> str:
         if anchors and draw(st.booleans()):
             entries.insert(0, "<<: *" + draw(st.sampled_from(anchors)))
         text = "{" + ", ".join(entries) + "}"
-    else:  # deep
+    elif kind == "deep":
         levels = draw(st.integers(1, 3 * limits.MAX_YAML_DEPTH))
         text = "[" * levels + "1" + "]" * levels
-    if kind not in ("alias", "control") and draw(st.integers(0, 3)) == 0:
+    else:  # bomb: a chain of anchors, each a list of `width` aliases to the one before
+        width, levels = draw(st.integers(2, 12)), draw(st.integers(1, 9))
+        first = len(anchors)
+        chain = [f"&a{first} [0.5, 0.5]"]
+        anchors.append(f"a{first}")
+        for level in range(1, levels):
+            chain.append(f"&a{first + level} [" + ", ".join([f"*a{first + level - 1}"] * width) + "]")
+            anchors.append(f"a{first + level}")
+        text = "[" + ", ".join(chain) + "]"
+    if kind not in ("alias", "control", "bomb") and draw(st.integers(0, 3)) == 0:
         name = f"a{len(anchors)}"
         anchors.append(name)
         if kind in ("list", "mapping") and draw(st.booleans()):
@@ -413,10 +424,11 @@ def hostile_scene(draw) -> str:
     """A scene-shaped document whose values are hostile YAML."""
     anchors: list = []
     slots = {
-        "E": "200.0e9", "nu": "0.3", "friction": "0.6", "radius": "0.05", "P": "1.0e5", "duration": "1.0",
-        "steps": "4", "name": "hostile",
+        "name": "hostile", "E": "200.0e9", "nu": "0.3", "friction": "0.6", "radius": "0.05", "P": "1.0e5",
+        "duration": "1.0", "steps": "4",
     }
-    for key in draw(st.lists(st.sampled_from(sorted(slots)), min_size=1, max_size=5, unique=True)):
+    chosen = draw(st.lists(st.sampled_from(sorted(slots)), min_size=1, max_size=5, unique=True))
+    for key in sorted(chosen, key=list(slots).index):  # in the order they appear in the text
         slots[key] = draw(yaml_value(anchors))
     text = (
         f"name: {slots['name']}\n"
@@ -426,7 +438,7 @@ def hostile_scene(draw) -> str:
         "output: {fields: []}\n"
         f"loads:\n  - ramp: {{to: {{P: {slots['P']}}}, duration: {slots['duration']}, steps: {slots['steps']}}}\n"
     )
-    if draw(st.booleans()):  # raw control characters anywhere in the text
+    if draw(st.integers(0, 7)) == 0:  # a raw control character anywhere in the text
         where = draw(st.integers(0, len(text)))
         text = text[:where] + draw(st.sampled_from(_CONTROL)) + text[where:]
     return text
