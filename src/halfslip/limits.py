@@ -64,12 +64,17 @@ digits to text, and converting long ones is quadratic."""
 MAX_RUN_BYTES = 4 * GIB
 """Largest memory estimate of one run (halfslip.scene.run_bytes): the sampled
 history, the stored steps with their fields, and the general solver's
-working set (about GENERAL_BYTES_PER_NODE per node). The examples need under
-50 MB; 10 million stored steps of 201-point fields would need 48 GB."""
+working set (GENERAL_BYTES_PER_NODE and GENERAL_BYTES_PER_NODE_PAIR). The
+examples need under 50 MB; 10 million stored steps of 201-point fields would
+need 48 GB, and 131,072 nodes about 4.8 GB (3.8 GB measured)."""
 
-GENERAL_BYTES_PER_NODE = 8 * 1024
-"""Working memory of the general solver per lattice node, measured: the
-motor scene at 8,192 nodes peaks at 190 MB, at 32,768 at 400 MB."""
+GENERAL_BYTES_PER_NODE = 4096
+GENERAL_BYTES_PER_NODE_PAIR = 0.25
+"""Working memory of the general solver: GENERAL_BYTES_PER_NODE n +
+GENERAL_BYTES_PER_NODE_PAIR n^2 bytes for n nodes, fitted to the peak memory
+of a short motor-like run beyond the interpreter's 126 MB: 64 MB at 8,192
+nodes, 274 MB at 32,768, 3.66 GB at 131,072 (the square term is the strain
+of points arriving in the contact, taken against 2 n lattice points)."""
 
 MAX_SWEEP_CASES = 1_000_000
 """Most cases of a sweep (grid product or explicit list). The result holds

@@ -197,9 +197,9 @@ def run_bytes(scene: Scene, method: str | None = None) -> dict[str, int]:
       the run collects them) and the stored fields, ``len(fields) x points``
       floats per stored step, held twice when the result is assembled. With
       ``skip_steady_cycles`` a cycles segment stores at least two cycles;
-    - ``solver``: the general solver's working set,
-      :data:`halfslip.limits.GENERAL_BYTES_PER_NODE` per node, when the
-      general solver may be chosen.
+    - ``solver``: the general solver's working set (a fit to measurements,
+      :data:`halfslip.limits.GENERAL_BYTES_PER_NODE_PAIR`), when the general
+      solver may be chosen.
 
     `method` overrides ``scene.solver.method`` ('auto', 'exact', 'general').
 
@@ -225,8 +225,13 @@ def run_bytes(scene: Scene, method: str | None = None) -> dict[str, int]:
         "history": 40 * history.n_steps,
         "records": 12 * 32 * stored,
         "fields": 2 * 8 * len(scene.output.fields) * scene.output.points * stored,
-        "solver": limits.GENERAL_BYTES_PER_NODE * scene.solver.nodes if general else 0,
+        "solver": _general_bytes(scene.solver.nodes) if general else 0,
     }
+
+
+def _general_bytes(nodes: int) -> int:
+    """The general solver's working memory at `nodes` (halfslip.limits)."""
+    return int(limits.GENERAL_BYTES_PER_NODE * nodes + limits.GENERAL_BYTES_PER_NODE_PAIR * nodes * nodes)
 
 
 _RUN_PART_FIELDS = {"history": "loads", "records": "loads", "fields": "output.points", "solver": "solver.nodes"}
