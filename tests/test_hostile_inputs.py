@@ -311,6 +311,9 @@ SMALL = {
                               "s.yaml", 1, "material", "a merge key (<<) takes a mapping"),
     "undefined_alias": (lambda d: write(d / "s.yaml", BASE.replace("friction: 0.6", "friction: *f")),
                         "s.yaml", 2, None, "found undefined alias"),
+    "plain_number_of_506_characters": (lambda d: write(d / "s.yaml", BASE.replace(
+                                           "friction: 0.6", "friction: 1" + "0" * 500 + "e-500")),
+                                       "s.yaml", 2, "friction", "a number of 506 characters"),
     "impossible_date": (lambda d: write(d / "s.yaml", BASE + "name: 2024-13-45\n"),
                         "s.yaml", 7, "name", "month must be in 1..12"),
     "python_object_tag": (lambda d: write(d / "s.yaml", BASE + "name: !!python/name:os.system x\n"),

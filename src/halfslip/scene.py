@@ -16,6 +16,7 @@ Paths inside a scene (table and profile files) are relative to the scene file.
 from __future__ import annotations
 
 import os
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -683,12 +684,21 @@ def _scalar(node: yaml.ScalarNode, path: str, loader: yaml.SafeLoader) -> Any:
     if isinstance(value, int) and not isinstance(value, bool) and abs(value).bit_length() > _FLOAT_BITS:
         raise HalfslipInputError(f"{excerpt(node.value)} is out of range; the largest number is 1.8e308",
                                  line=line, field=path or None)
-    if isinstance(value, str) and node.style is None and len(value) <= limits.MAX_NUMBER_DIGITS:
+    if isinstance(value, str) and node.style is None:
+        if len(value) > limits.MAX_NUMBER_DIGITS:
+            if _LONG_NUMBER.fullmatch(value):
+                raise HalfslipInputError(
+                    f"a number of {len(value):,} characters: at most {limits.MAX_NUMBER_DIGITS} are read "
+                    "(the largest number is 1.8e308)", line=line, field=path or None)
+            return value
         try:
             return float(value)
         except ValueError:
             return value
     return value
+
+
+_LONG_NUMBER = re.compile(r"[-+]?[0-9_]*\.?[0-9_]*(?:[eE][-+]?[0-9]+)?")
 
 
 def _line_of(field: str | None, lines: Mapping[str, int]) -> int | None:
