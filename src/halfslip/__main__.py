@@ -1,4 +1,5 @@
-"""``python -m halfslip``: the command line."""
-from .cli import main
+"""``python -m halfslip``: the command line (halfslip.cli)."""
+from halfslip.cli import main
 
-main()
+if __name__ == "__main__":
+    main(prog_name="halfslip")

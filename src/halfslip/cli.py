@@ -13,8 +13,8 @@ import click
 
 from . import __version__
 from .errors import HalfslipInputError
-from .geometry import Hertz, RoundedPunch, TabulatedProfile
-from .scene import Scene, load_scene
+from .geometry import Hertz, ProfileSpanError, RoundedPunch, TabulatedProfile
+from .scene import Scene, load_scene, scene_error
 
 EXIT_INPUT_ERROR = 2
 """Exit status for bad input (the same status click uses for usage errors)."""
@@ -293,8 +293,14 @@ def run(scene_file: str, output: str | None, method: str | None, nodes: int | No
         except MethodError as error:
             raise HalfslipInputError(str(error), file=str(scene.path) if scene.path else None,
                                      field="solver.method") from None
-        except HalfslipInputError as error:  # the run file refused on resuming names that file
-            raise (error.located(str(out), None) if error.field == "--resume" else error) from None
+        except ProfileSpanError as error:  # loads the scene check did not foresee (check_contacts)
+            raise scene_error(scene, f"the profile cannot carry the loads: {error}", "geometry") from None
+        except HalfslipInputError as error:
+            if error.field == "--resume":  # the run file refused on resuming names that file
+                raise error.located(str(out), None) from None
+            if error.file is not None:
+                raise
+            raise scene_error(scene, error.message, error.field or "") from None  # e.g. --nodes too large
         finally:
             progress.close()
             for sig, handler in handlers.items():
@@ -453,6 +459,8 @@ def steady(scene_file: str, segment: int | None, output: str | None, overwrite: 
 def _steady(scene: Scene, segment: int | None, out, steady_state) -> None:
     try:
         ds = steady_state(scene, segment)
+    except ProfileSpanError as error:
+        raise scene_error(scene, f"the profile cannot carry the loads: {error}", "geometry") from None
     except HalfslipInputError as error:
         raise error.located(str(scene.path) if scene.path else None, None) from None
     regime = int(ds["regime"])

@@ -17,6 +17,13 @@ from collections.abc import Collection, Mapping
 from numbers import Real
 from typing import Any
 
+EXCERPT_CHARS = 40
+"""Most characters of input text an error message quotes (:func:`excerpt`): enough to
+recognise a value or a key, too few to echo a file that was read by mistake."""
+
+_FIELD_CHARS = 80  # the longest field path of a valid scene is about 40 characters
+_MESSAGE_CHARS = 600  # the longest message composed by halfslip is about 300 characters
+
 _NUMBER_WITH_UNIT = re.compile(r"^\s*[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*[^\d\s.eE+-]")
 
 
@@ -56,7 +63,13 @@ class HalfslipInputError(ValueError):
 
     def __str__(self) -> str:
         location = ":".join(str(part) for part in (self.file, self.line) if part is not None)
-        parts = [part for part in (location, self.field, self.message) if part]
+        field = self.field
+        if field and len(field) > _FIELD_CHARS:  # a field path holds keys from the input: keep it short
+            field = f"{field[:_FIELD_CHARS]}..."
+        message = self.message
+        if len(message) > _MESSAGE_CHARS:  # backstop; quotes are cut to EXCERPT_CHARS by excerpt()
+            message = f"{message[:_MESSAGE_CHARS]}..."
+        parts = [part for part in (location, field, message) if part]
         # one line whatever the input: control characters from keys or values are escaped
         return "".join(c if c.isprintable() else repr(c)[1:-1] for c in ": ".join(parts))
 
@@ -70,6 +83,21 @@ class HalfslipInputError(ValueError):
         )
 
 
+def excerpt(text: Any, limit: int = EXCERPT_CHARS) -> str:
+    """Quote input text for an error message: ``repr`` of at most `limit` characters.
+
+    Every message that quotes text from an input file goes through here, so a
+    file read by mistake (``halfslip validate /etc/passwd``) is never echoed:
+    longer text is cut and marked with ``...`` and the number of characters
+    left out. Control characters come out escaped (``repr``), so the quote is
+    one printable line.
+    """
+    text = str(text)
+    if len(text) <= limit:
+        return repr(text)
+    return f"{text[:limit]!r}... ({len(text) - limit:,} more characters)"
+
+
 def describe(value: Any) -> str:
     """Name the type of a parsed value the way a scene author would."""
     if value is None:
@@ -77,14 +105,21 @@ def describe(value: Any) -> str:
     if isinstance(value, bool):
         return f"the boolean {str(value).lower()}"
     if isinstance(value, str):
-        return f"the string {str(value)!r}"
+        return f"the string {excerpt(value)}"
     if isinstance(value, Mapping):
         return "a mapping"
     if isinstance(value, (list, tuple)):
         return "a list"
     if isinstance(value, Real):
-        return f"the number {value!r}"
+        return f"the number {_number_text(value)}"
     return f"a value of type {type(value).__name__}"
+
+
+def _number_text(value: Real) -> str:
+    """``repr`` of a number, shortened for integers too long to print whole."""
+    if isinstance(value, int) and value.bit_length() > 1100:  # about 330 digits: beyond any float
+        return f"(an integer of about {int(value.bit_length() * 0.30103) + 1:,} digits)"
+    return repr(value)
 
 
 def check_number(
@@ -118,7 +153,7 @@ def check_number(
     if isinstance(value, str):
         if _NUMBER_WITH_UNIT.match(value):
             raise HalfslipInputError(
-                f"{value!r} carries a unit; give the number in SI units without a unit",
+                f"{excerpt(value)} carries a unit; give the number in SI units without a unit",
                 field=field,
             )
         try:
@@ -130,7 +165,11 @@ def check_number(
         )
     if isinstance(value, bool) or not isinstance(value, Real):
         raise HalfslipInputError(f"expected a number, got {describe(value)}", field=field)
-    number = float(value)
+    try:
+        number = float(value)
+    except OverflowError:  # an integer beyond the float range
+        raise HalfslipInputError(f"is out of range: {describe(value)}; the largest number is 1.8e308",
+                                 field=field) from None
     if not math.isfinite(number):
         raise HalfslipInputError(f"must be a finite number, got {number}", field=field)
     if positive and not number > 0:
@@ -217,7 +256,7 @@ def check_mapping(
     for key in value:
         if key not in allowed:
             raise HalfslipInputError(
-                f"unknown key {key!r}{suggest(key, allowed)}", field=join(field, str(key))
+                f"unknown key {excerpt(key)}{suggest(key, allowed)}", field=join(field, str(key))
             )
     for key in required:
         if key not in value:

@@ -73,6 +73,16 @@ _EPS = float(np.finfo(float).eps)
 FloatArray = NDArray[np.float64]
 
 
+class ProfileSpanError(ValueError):
+    """No contact carries the loads within the profile: a contact that would leave a
+    tabulated profile's span, or no single contact found (a profile not lowest at 0).
+
+    Raised by the normal problem; the scene reader checks the history's extreme
+    loads for it, and the command line reports it as an error of the scene's
+    ``geometry``.
+    """
+
+
 @dataclass(frozen=True)
 class Material:
     """Elastically similar bodies in plane strain."""
@@ -899,6 +909,9 @@ class _PunchForms(_SymmetricForms):
         return out
 
 
+_BATCH_ELEMENTS = 1 << 18  # half-width-piece pairs per batch of _NumericalForms: ~60 MB of temporaries
+
+
 class _NumericalForms(_SymmetricForms):
     """A symmetric tabulated profile: P(a) = (a / A) I_1(0, a), a(P) by a bracketed Newton iteration.
 
@@ -917,12 +930,23 @@ class _NumericalForms(_SymmetricForms):
 
     @cached_property
     def _size_loads(self) -> FloatArray:
-        """P(x_k), made non-decreasing (a non-convex profile may lose load as a grows)."""
-        return np.maximum.accumulate(self.load(self.sizes))
+        """P(x_k), made non-decreasing (a non-convex profile may lose load as a grows).
+
+        A batch of B half-widths over J pieces takes about 240 B J bytes of
+        temporaries; long tables are done in batches of at most
+        _BATCH_ELEMENTS half-width-piece pairs (the same numbers, bounded memory).
+        """
+        sizes = self.sizes
+        batch = max(1, _BATCH_ELEMENTS // max(1, self.pieces.breaks.size + 1))
+        if sizes.size <= batch:
+            loads = self.load(sizes)
+        else:
+            loads = np.concatenate([self.load(sizes[i:i + batch]) for i in range(0, sizes.size, batch)])
+        return np.maximum.accumulate(loads)
 
     def load(self, a: FloatArray) -> FloatArray:
         if np.any(a > self.limit):
-            raise ValueError(
+            raise ProfileSpanError(
                 f"half-width {np.max(a):g} too large for the tabulated profile: "
                 f"the contact would leave the tabulated span [{-self.limit:g}, {self.limit:g}]"
             )
@@ -938,7 +962,7 @@ class _NumericalForms(_SymmetricForms):
             targets = flat[positive]
             loads = self._size_loads
             if np.max(targets) > loads[-1]:
-                raise ValueError(
+                raise ProfileSpanError(
                     f"load {np.max(targets):g} too large for the tabulated profile: the contact would "
                     f"leave the tabulated span [{-self.limit:g}, {self.limit:g}] (beyond P = {loads[-1]:g})"
                 )
@@ -1072,14 +1096,14 @@ class NormalProblem:
                 if tabulated
                 else "the general solver did not converge"
             )
-            raise ValueError(
+            raise ProfileSpanError(
                 f"no contact found for P={P!r}, M={M!r} (residual {result.residual:.3g} after "
                 f"{result.iterations} iterations): {why}"
             )
         left, right = result.center - result.half_width, result.center + result.half_width
         slack = 1e-12 * (highest - lowest) if tabulated else 0.0
         if left < lowest - slack or right > highest + slack:
-            raise ValueError(
+            raise ProfileSpanError(
                 f"load too large for the tabulated profile: the contact [{left:g}, {right:g}] under "
                 f"P={P!r}, M={M!r} leaves the tabulated span [{lowest:g}, {highest:g}]"
             )

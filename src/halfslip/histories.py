@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from . import limits
 from .errors import (
     HalfslipInputError,
     check_count,
@@ -46,9 +47,11 @@ from .errors import (
     check_mapping,
     check_number,
     check_string,
+    excerpt,
     join,
     suggest,
 )
+from .io import PATH_CHARS, read_input_text
 
 LOADS = ("P", "Q", "M", "sigma")
 """Names of the four loads, in the order used everywhere."""
@@ -244,7 +247,7 @@ class LoadHistory:
             ((kind, body),) = spec.items()
             if kind not in SEGMENT_KINDS:
                 raise HalfslipInputError(
-                    f"unknown segment kind {kind!r}{suggest(kind, SEGMENT_KINDS)}", field=join(field, str(kind))
+                    f"unknown segment kind {excerpt(kind)}{suggest(kind, SEGMENT_KINDS)}", field=join(field, str(kind))
                 )
             line = lines[index] if lines is not None else None
             field = join(field, kind)
@@ -650,6 +653,8 @@ def read_csv_columns(
     allowed: Sequence[str],
     required: Sequence[str],
     field: str,
+    what: str = "table",
+    max_rows: int | None = None,
 ) -> tuple[dict[str, np.ndarray], list[int]]:
     """Read a comma-separated table with a header row of column names.
 
@@ -664,6 +669,13 @@ def read_csv_columns(
     field : str
         Field path of the table in the scene (e.g. ``loads[2].table``); the
         errors name ``{field}.file`` or ``{field}.{column}``.
+    what : str
+        What the table is ("table", "profile"), for messages.
+    max_rows : int, optional
+        Most lines the file may have besides the header (default
+        :data:`halfslip.limits.MAX_TABLE_ROWS`); the file is read with
+        :func:`halfslip.io.read_input_text` within
+        :data:`halfslip.limits.MAX_TABLE_BYTES`.
 
     Returns
     -------
@@ -679,14 +691,16 @@ def read_csv_columns(
         where it was given); bad content names the CSV file and its line.
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise HalfslipInputError(f"table file {str(path)!r} not found", field=join(field, "file")) from None
-    except IsADirectoryError:
-        raise HalfslipInputError(f"{str(path)!r} is a directory, not a table file", field=join(field, "file")) from None
-    except (OSError, UnicodeDecodeError) as error:
-        raise HalfslipInputError(f"cannot read table file {str(path)!r}: {error}", field=join(field, "file")) from None
+    file_field = join(field, "file")
+    text = read_input_text(path, what, limits.MAX_TABLE_BYTES, field=file_field)
+    max_rows = limits.MAX_TABLE_ROWS if max_rows is None else max_rows
+    count = text.count("\n") + (not text.endswith("\n"))
+    if count > max_rows + 1:  # counted before the text is split: a long file costs no memory
+        raise HalfslipInputError(
+            f"{what} file {excerpt(str(path), PATH_CHARS)} has {count:,} lines; at most {max_rows:,} rows "
+            f"and a header are read (halfslip.limits, docs/interface.md \"Limits\")",
+            field=file_field,
+        )
 
     def bad(message: str, line: int, column: str | None = None) -> HalfslipInputError:
         return HalfslipInputError(message, file=str(path), line=line, field=join(field, column) if column else field)
@@ -703,11 +717,11 @@ def read_csv_columns(
     for name in names:
         if name not in allowed:
             raise bad(
-                f"unknown column {name!r} in the header{suggest(name, allowed)} (columns: {', '.join(allowed)})",
+                f"unknown column {excerpt(name)} in the header{suggest(name, allowed)} (columns: {', '.join(allowed)})",
                 header_line,
             )
         if names.count(name) > 1:
-            raise bad(f"column {name!r} appears twice in the header", header_line)
+            raise bad(f"column {excerpt(name)} appears twice in the header", header_line)
     for name in required:
         if name not in names:
             raise bad(f"the header has no column {name!r}", header_line)

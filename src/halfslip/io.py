@@ -1,12 +1,118 @@
-"""Results to and from HDF5 (netCDF-4 layout, readable by xarray and h5py)."""
+"""Input text files in; results to and from HDF5 (netCDF-4 layout, readable by xarray and h5py)."""
 from __future__ import annotations
 
 import os
+import stat
 from pathlib import Path
 
 import xarray as xr
 
+from .errors import HalfslipInputError, excerpt
+
 ENGINE = "h5netcdf"
+
+PATH_CHARS = 160
+"""Most characters of a file path quoted in an error (paths come from the input too)."""
+
+_CHUNK = 1 << 20
+
+
+def read_input_text(path: str | os.PathLike, what: str, limit: int, *, field: str | None = None) -> str:
+    """The UTF-8 text of an input file (scene, sweep, table, profile), read within limits.
+
+    Every file halfslip reads as input comes through here. It refuses, each
+    with a one-line :class:`HalfslipInputError` and before reading more than
+    ``limit + 1`` bytes: a missing file, anything that is not a regular file
+    (a directory, a FIFO, ``/dev/zero``: checked with ``os.stat`` before the
+    file is opened, and opened non-blocking and checked again, so nothing can
+    make it wait), a file larger than `limit` bytes, text that is not UTF-8,
+    and NUL characters.
+
+    Parameters
+    ----------
+    path : path
+        The file.
+    what : str
+        What the file is ("scene", "sweep", "table", "profile"), for messages.
+    limit : int
+        Most bytes accepted (a constant of :mod:`halfslip.limits`).
+    field : str, optional
+        Field of the scene or sweep file that named this file. When given,
+        errors about the file as a whole (missing, not a file, too large) are
+        located at that field and name the file in the message, and errors
+        inside the file (bad UTF-8, NUL) name the file, its line and `field`.
+        Without it, every error names the file itself.
+
+    Returns
+    -------
+    str
+    """
+    path = Path(path)
+    quoted = excerpt(str(path), PATH_CHARS)
+
+    def whole(reason: str) -> HalfslipInputError:
+        if field is None:
+            return HalfslipInputError(reason, file=str(path))
+        return HalfslipInputError(f"{what} file {quoted}: {reason}", field=field)
+
+    def regular(mode: int) -> None:
+        if stat.S_ISDIR(mode):
+            raise whole(f"is a directory, not a {what} file")
+        if not stat.S_ISREG(mode):
+            raise whole(f"is not a regular file ({_file_kind(mode)}); give the path of a {what} file")
+
+    try:
+        regular(os.stat(path).st_mode)
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
+    except FileNotFoundError:
+        raise whole("no such file" if field is None else "not found") from None
+    except OSError as error:
+        raise whole(f"cannot read: {error.strerror or error}") from None
+    try:
+        regular(os.fstat(fd).st_mode)  # the path may have been replaced since the stat
+        chunks, size = [], 0
+        while size <= limit:
+            chunk = os.read(fd, min(_CHUNK, limit + 1 - size))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            size += len(chunk)
+    except OSError as error:
+        raise whole(f"cannot read: {error.strerror or error}") from None
+    finally:
+        os.close(fd)
+    if size > limit:
+        raise whole(f"is larger than {limit:,} bytes, the most read for a {what} file "
+                    f"(halfslip.limits, docs/interface.md \"Limits\")")
+    data = b"".join(chunks)
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise HalfslipInputError(
+            f"is not UTF-8 text (byte 0x{data[error.start]:02x} at column {_column(data, error.start)})",
+            file=str(path), line=data.count(b"\n", 0, error.start) + 1, field=field,
+        ) from None
+    nul = text.find("\0")
+    if nul >= 0:
+        raise HalfslipInputError(
+            "contains a NUL character (a binary file?)", file=str(path), line=text.count("\n", 0, nul) + 1,
+            field=field,
+        )
+    return text
+
+
+def _column(data: bytes, index: int) -> int:
+    """1-based column of byte `index` in its line."""
+    return index - (data.rfind(b"\n", 0, index) + 1) + 1
+
+
+def _file_kind(mode: int) -> str:
+    """What a non-regular file is, in words."""
+    for test, name in ((stat.S_ISFIFO, "a FIFO"), (stat.S_ISCHR, "a character device"),
+                       (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket")):
+        if test(mode):
+            return name
+    return "not a plain file"
 
 
 def write_result(ds: xr.Dataset, path: str | os.PathLike) -> Path:
@@ -64,16 +170,16 @@ def check_result_file(path: str | os.PathLike) -> None:
                 if seen["objects"] > RESULT_LIMITS["objects"]:
                     raise CheckpointError(f"it holds more than {RESULT_LIMITS['objects']} objects")
                 if not isinstance(group.get(name, getlink=True), h5py.HardLink):
-                    raise CheckpointError(f"{_excerpt(name)} is a link to elsewhere")
+                    raise CheckpointError(f"{excerpt(name)} is a link to elsewhere")
                 obj = group[name]
                 if isinstance(obj, h5py.Group):
                     stack.append(obj)
                     continue
                 if not isinstance(obj, h5py.Dataset) or obj.is_virtual or obj.external:
-                    raise CheckpointError(f"{_excerpt(name)} is not a plain dataset of this file")
+                    raise CheckpointError(f"{excerpt(name)} is not a plain dataset of this file")
                 kind = obj.dtype.kind
                 if not (kind in _ARRAY_KINDS or h5py.check_string_dtype(obj.dtype) is not None):
-                    raise CheckpointError(f"{_excerpt(name)} holds {obj.dtype}, neither numbers nor text")
+                    raise CheckpointError(f"{excerpt(name)} holds {obj.dtype}, neither numbers nor text")
                 seen["elements"] += int(obj.size)
                 if seen["elements"] > RESULT_LIMITS["elements"]:
                     raise CheckpointError(f"its datasets hold more than {RESULT_LIMITS['elements']} numbers")
@@ -83,7 +189,7 @@ def check_result_file(path: str | os.PathLike) -> None:
 def _check_attributes(obj) -> None:
     for name in obj.attrs:
         if obj.attrs.get_id(name).get_storage_size() > RESULT_LIMITS["attribute_bytes"]:
-            raise CheckpointError(f"its attribute {_excerpt(name)} is larger than {RESULT_LIMITS['attribute_bytes']} bytes")
+            raise CheckpointError(f"its attribute {excerpt(name)} is larger than {RESULT_LIMITS['attribute_bytes']} bytes")
 
 
 # -- checkpoints: the solver state of an unfinished run ----------------------
@@ -235,7 +341,7 @@ def decode_tree(node, arrays: list, kinds: dict | None = None, depth: int = 0):
     if "record" in node and len(node) == 2:
         cls = kinds.get(node["record"]) if isinstance(node["record"], str) else None
         if cls is None:
-            raise CheckpointError(f"the checkpoint names an unknown record kind {_excerpt(node['record'])}")
+            raise CheckpointError(f"the checkpoint names an unknown record kind {excerpt(node['record'])}")
         if dc.is_dataclass(cls):
             fields = node.get("fields")
             names = [f.name for f in dc.fields(cls)]
@@ -250,12 +356,6 @@ def decode_tree(node, arrays: list, kinds: dict | None = None, depth: int = 0):
             raise CheckpointError(f"a {node['record']} record of the checkpoint has the wrong number of items")
         return cls(*(decode_tree(v, arrays, kinds, inner) for v in items))
     raise CheckpointError("not a halfslip checkpoint node")
-
-
-def _excerpt(value, limit: int = 40) -> str:
-    """A short, escaped quotation of untrusted text for a message."""
-    text = repr(str(value))
-    return text if len(text) <= limit else text[: limit - 4] + "...'"
 
 
 def _add_checkpoint(h5file, tree) -> None:
@@ -480,10 +580,10 @@ def check_output(path: str | os.PathLike, *, inputs=(), overwrite: bool = False,
         raise HalfslipInputError("is a folder; name a file such as OUT.h5", file=where, field=option)
     folder = path.parent
     if not folder.is_dir():
-        raise HalfslipInputError(f"the folder {_excerpt(folder, 80)} does not exist", file=where, field=option)
+        raise HalfslipInputError(f"the folder {excerpt(folder, PATH_CHARS)} does not exist", file=where, field=option)
     for source in inputs:
         if source is not None and _same_file(path, Path(source)):
-            raise HalfslipInputError(f"is an input of this run ({_excerpt(source, 80)}); name another file",
+            raise HalfslipInputError(f"is an input of this run ({excerpt(source, PATH_CHARS)}); name another file",
                                      file=where, field=option)
     if path.exists() or path.is_symlink():
         if not path.is_file():

@@ -16,6 +16,7 @@ Paths inside a scene (table and profile files) are relative to the scene file.
 from __future__ import annotations
 
 import os
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,7 +25,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from . import geometry
+from . import geometry, io, limits
 from .errors import (
     HalfslipInputError,
     check_bool,
@@ -34,6 +35,7 @@ from .errors import (
     check_mapping,
     check_number,
     check_string,
+    excerpt,
     join,
 )
 from .histories import LoadHistory, check_column, read_csv_columns
@@ -157,6 +159,7 @@ class Scene:
             raise HalfslipInputError(f"Poisson's ratio must lie in (-1, 0.5), got {nu:g}", field="material.nu")
         object.__setattr__(self, "material", geometry.Material(E=E, nu=nu))
         object.__setattr__(self, "friction", check_number(self.friction, "friction", nonnegative=True))
+        check_run_bytes(self)
 
     def warnings(self) -> tuple[str, ...]:
         """Return messages about legal but physically suspect input.
@@ -184,6 +187,89 @@ class Scene:
         return tuple(messages)
 
 
+def run_bytes(scene: Scene, method: str | None = None) -> dict[str, int]:
+    """Estimate the memory a run of `scene` surely needs, by part [bytes].
+
+    A lower bound of what :func:`halfslip.simulate` allocates, so that a scene
+    refused for it could not have run:
+
+    - ``history``: the sampled times and four loads, 40 bytes a step;
+    - ``records``: twelve numbers per stored step (about 32 bytes each while
+      the run collects them) and the stored fields, ``len(fields) x points``
+      floats per stored step, held twice when the result is assembled. With
+      ``skip_steady_cycles`` a cycles segment stores at least two cycles;
+    - ``solver``: the general solver's working set (a fit to measurements,
+      :data:`halfslip.limits.GENERAL_BYTES_PER_NODE_PAIR`), when the general
+      solver may be chosen.
+
+    `method` overrides ``scene.solver.method`` ('auto', 'exact', 'general').
+
+    Returns
+    -------
+    dict
+        ``{"history": ..., "records": ..., "fields": ..., "solver": ...}``.
+    """
+    history = scene.history
+    marched = 0
+    for segment in history.segments:
+        if segment.kind == "cycles" and scene.solver.skip_steady_cycles:
+            marched += min(segment.count, 2) * segment.steps_per_cycle
+        else:
+            marched += segment.steps
+    stored = -(-marched // scene.output.every) + 1
+    method = method or scene.solver.method
+    general = method == "general" or (
+        method == "auto"
+        and not (scene.profile.symmetric and not np.any(history.M) and not np.any(history.sigma))
+    )
+    return {
+        "history": 40 * history.n_steps,
+        "records": 12 * 32 * stored,
+        "fields": 2 * 8 * len(scene.output.fields) * scene.output.points * stored,
+        "solver": _general_bytes(scene.solver.nodes) if general else 0,
+    }
+
+
+def _general_bytes(nodes: int) -> int:
+    """The general solver's working memory at `nodes` (halfslip.limits)."""
+    return int(limits.GENERAL_BYTES_PER_NODE * nodes + limits.GENERAL_BYTES_PER_NODE_PAIR * nodes * nodes)
+
+
+_RUN_PART_FIELDS = {"history": "loads", "records": "loads", "fields": "output.points", "solver": "solver.nodes"}
+
+
+def check_run_bytes(scene: Scene, method: str | None = None) -> None:
+    """Refuse a scene whose run would need more than :data:`halfslip.limits.MAX_RUN_BYTES`.
+
+    The error names the field of the largest part of :func:`run_bytes` and
+    gives the estimate.
+    """
+    parts = run_bytes(scene, method)
+    total = sum(parts.values())
+    if total <= limits.MAX_RUN_BYTES:
+        return
+    largest = max(parts, key=parts.__getitem__)
+    detail = ", ".join(f"{name} {_bytes_text(size)}" for name, size in parts.items() if size)
+    hint = {
+        "loads": "fewer steps, or output.every > 1",
+        "output.points": "fewer output.points, fewer output.fields, or output.every > 1",
+        "solver.nodes": "fewer solver.nodes",
+    }[_RUN_PART_FIELDS[largest]]
+    raise HalfslipInputError(
+        f"the run would need about {_bytes_text(total)} of memory ({detail}); at most "
+        f"{_bytes_text(limits.MAX_RUN_BYTES)} (halfslip.limits.MAX_RUN_BYTES): use {hint}",
+        field=_RUN_PART_FIELDS[largest],
+    )
+
+
+def _bytes_text(size: float) -> str:
+    """A byte count for messages: ``3.2 GB``."""
+    for unit, scale in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if size >= scale:
+            return f"{size / scale:.3g} {unit}"
+    return f"{int(size)} B"
+
+
 def load_scene(path: str | os.PathLike) -> Scene:
     """Read and check a scene file.
 
@@ -207,17 +293,12 @@ def load_scene(path: str | os.PathLike) -> Scene:
 
 
 def read_input_text(path: Path, what: str) -> str:
-    """The UTF-8 text of an input file, or a one-line HalfslipInputError naming it."""
-    try:
-        return path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise HalfslipInputError("no such file", file=str(path)) from None
-    except IsADirectoryError:
-        raise HalfslipInputError(f"is a directory, not a {what} file", file=str(path)) from None
-    except UnicodeDecodeError:
-        raise HalfslipInputError("is not UTF-8 text", file=str(path)) from None
-    except OSError as error:
-        raise HalfslipInputError(f"cannot read: {error.strerror}", file=str(path)) from None
+    """The UTF-8 text of a scene or sweep file, or a one-line HalfslipInputError naming it.
+
+    :func:`halfslip.io.read_input_text` with the limit of YAML files
+    (:data:`halfslip.limits.MAX_SCENE_BYTES`).
+    """
+    return io.read_input_text(path, what, limits.MAX_SCENE_BYTES)
 
 
 def parse_scene(
@@ -272,7 +353,7 @@ def _build_scene(data: Any, lines: Mapping[str, int], base: Path, text: str, pat
     segment_lines = (
         [lines.get(f"loads[{index}]") for index in range(len(segments))] if isinstance(segments, list) else None
     )
-    return Scene(
+    scene = Scene(
         name=data.get("name", path.stem if path is not None else "scene"),
         material=geometry.Material(E=material["E"], nu=material["nu"]),
         friction=data["friction"],
@@ -283,6 +364,76 @@ def _build_scene(data: Any, lines: Mapping[str, int], base: Path, text: str, pat
         text=text,
         path=path,
     )
+    check_contacts(scene)
+    return scene
+
+
+def check_contacts(scene: Scene) -> None:
+    """Check that the contact fits a tabulated profile under the history's extreme loads.
+
+    The normal problem is solved at the sampled points of largest P, largest
+    and smallest M and largest and smallest M/P (and, when the exact method
+    may serve the scene, at the 5 % higher load up to which it tabulates the
+    contact). A contact that would leave the tabulated span, or none found,
+    is an error of ``geometry``, foreseen here instead of in the middle of a
+    run. Analytic profiles extend without end and are not checked.
+    """
+    profile = scene.profile
+    if not isinstance(profile, geometry.TabulatedProfile):
+        return
+    history = scene.history
+    P, M = history.P, history.M
+    loaded = np.flatnonzero(P > 0.0)
+    if loaded.size == 0:
+        return
+    ratio = M[loaded] / P[loaded]
+    candidates = dict.fromkeys(
+        int(index) for index in (
+            loaded[np.argmax(P[loaded])], loaded[np.argmax(M[loaded])], loaded[np.argmin(M[loaded])],
+            loaded[np.argmax(ratio)], loaded[np.argmin(ratio)],
+        )
+    )
+    from .solvers.levels import TABLE_HEADROOM
+
+    problem = geometry.NormalProblem(profile, scene.material.compliance)
+    try:
+        for index in candidates:
+            at = f"P = {P[index]:g} N/m, M = {M[index]:g} N (t = {history.t[index]:g} s)"
+            problem.solve(float(P[index]), float(M[index]))
+        if scene.solver.method != "general" and profile.symmetric and not np.any(M) and not np.any(history.sigma):
+            top = TABLE_HEADROOM * float(np.max(P))
+            at = f"P = {top:g} N/m ({TABLE_HEADROOM:g} x the largest P, to which the exact method tabulates)"
+            problem.half_width(np.array([top]))
+    except geometry.ProfileSpanError as error:
+        source = scene_profile_source(scene)
+        source = f" {source}" if source else ""
+        raise HalfslipInputError(
+            f"the profile{source} cannot carry {at}: {error}", field="geometry"
+        ) from None
+
+
+def scene_error(scene: Scene, message: str, field: str) -> HalfslipInputError:
+    """An error of `field` of a loaded scene, located at its file and line."""
+    line = None
+    if scene.text is not None:
+        try:
+            line = _line_of(field, _read_yaml(scene.text)[1])
+        except HalfslipInputError:
+            pass
+    return HalfslipInputError(message, file=str(scene.path) if scene.path is not None else None, line=line,
+                              field=field)
+
+
+def scene_profile_source(scene: Scene) -> str | None:
+    """The profile file named by the scene's text, if any (for messages)."""
+    if scene.text is None:
+        return None
+    try:
+        data, _ = _read_yaml(scene.text)
+        name = data["geometry"]["file"]
+    except (HalfslipInputError, KeyError, TypeError):
+        return None
+    return excerpt(name, io.PATH_CHARS) if isinstance(name, str) else None
 
 
 def _build_profile(spec: Any, base: Path) -> Any:
@@ -301,15 +452,65 @@ def _build_profile(spec: Any, base: Path) -> Any:
     if "file" in spec:
         check_mapping(spec, "geometry", ("kind", "file"))
         name = check_string(spec["file"], "geometry.file")
-        columns, _ = read_csv_columns(base / name, ("x", "h"), ("x", "h"), "geometry")
-        profile = _make(geometry.TabulatedProfile, "geometry.file", columns["x"], columns["h"])
-        profile.source = str(base / name)  # an input of the run: never an output (cli.scene_inputs)
+        path = base / name
+        columns, row_lines = read_csv_columns(path, ("x", "h"), ("x", "h"), "geometry", what="profile",
+                                              max_rows=limits.MAX_PROFILE_ROWS)
+
+        def at_row(message: str, column: str, row: int) -> HalfslipInputError:
+            return HalfslipInputError(message, file=str(path), line=row_lines[row], field=f"geometry.{column}")
+
+        profile = _profile_from_samples(columns["x"], columns["h"], at_row, "geometry.file")
+        profile.source = str(path)  # an input of the run: never an output (cli.scene_inputs)
         return profile
     check_mapping(spec, "geometry", ("kind", "x", "h"), ("x", "h"))
+    for column in ("x", "h"):
+        if isinstance(spec[column], list) and len(spec[column]) > limits.MAX_PROFILE_ROWS:
+            raise HalfslipInputError(
+                f"has {len(spec[column]):,} values; a profile has at most {limits.MAX_PROFILE_ROWS:,} samples "
+                "(halfslip.limits.MAX_PROFILE_ROWS)", field=f"geometry.{column}")
     x, h = check_column(spec["x"], "geometry.x"), check_column(spec["h"], "geometry.h")
     if x.size != h.size:
         raise HalfslipInputError(f"has {h.size} values but x has {x.size}", field="geometry.h")
-    return _make(geometry.TabulatedProfile, "geometry", x, h)
+
+    def at_item(message: str, column: str, row: int) -> HalfslipInputError:
+        return HalfslipInputError(message, field=f"geometry.{column}[{row}]")
+
+    return _profile_from_samples(x, h, at_item, "geometry")
+
+
+PROFILE_DIP_RTOL = 1e-6
+"""How far below h(0) a profile sample may lie, relative to the profile's height
+range: a measured profile's lowest point may sit a little off x = 0 within its
+noise; deeper, the first contact would start away from x = 0 (or nowhere, for a
+concave profile), which the normal problem cannot solve."""
+
+
+def _profile_from_samples(x: np.ndarray, h: np.ndarray, at_row: Any, field: str) -> geometry.TabulatedProfile:
+    """Build a tabulated profile, naming the offending row of a bad sample.
+
+    ``at_row(message, column, row)`` makes the located error. Beyond the
+    checks of :class:`~halfslip.geometry.TabulatedProfile` the gap must be
+    lowest at x = 0, where the pad first touches (within PROFILE_DIP_RTOL).
+    """
+    if x.size >= 2:
+        falling = np.flatnonzero(np.diff(x) <= 0.0)
+        if falling.size:
+            row = int(falling[0]) + 1
+            raise at_row(f"x must increase strictly; {x[row]:g} follows {x[row - 1]:g}", "x", row)
+        if not x[0] < 0.0:
+            raise at_row(f"the samples must reach both sides of x = 0; the first x is {x[0]:g}", "x", 0)
+        if not x[-1] > 0.0:
+            raise at_row(f"the samples must reach both sides of x = 0; the last x is {x[-1]:g}", "x", x.size - 1)
+    profile = _make(geometry.TabulatedProfile, field, x, h)
+    height = float(np.max(profile.h) - np.min(profile.h))
+    lowest = int(np.argmin(profile.h))
+    if profile.h[lowest] < -PROFILE_DIP_RTOL * height:
+        raise at_row(
+            f"the gap at x = {x[lowest]:g} m is {-profile.h[lowest]:g} m below its value at x = 0; the profile "
+            "must be lowest at x = 0, where it first touches (a convex pad: shift x so that its lowest point is at 0)",
+            "h", lowest,
+        )
+    return profile
 
 
 def _make(factory: Any, field: str, *parameters: Any) -> Any:
@@ -322,47 +523,143 @@ def _make(factory: Any, field: str, *parameters: Any) -> Any:
 
 # -- YAML with line numbers ------------------------------------------------
 
+_INT_TAG = "tag:yaml.org,2002:int"
+_FLOAT_TAG = "tag:yaml.org,2002:float"
+_MERGE_TAG = "tag:yaml.org,2002:merge"
+_FLOAT_BITS = 1024  # 2**1024 is the first integer beyond the largest float (1.8e308)
+
+
+def _yaml_error(message: str, mark: Any) -> HalfslipInputError:
+    """An error of the YAML text at `mark` (a PyYAML mark or None)."""
+    return HalfslipInputError(message, line=mark.line + 1 if mark is not None else None)
+
+
+class _BoundedLoader(yaml.SafeLoader):
+    """PyYAML's safe loader, composing within :mod:`halfslip.limits`.
+
+    While the node tree is composed it counts the nodes the tree expands to
+    (an alias counts as the whole of its anchor, so "billion laughs" is
+    refused after MAX_YAML_NODES nodes, not after gigabytes), the depth of
+    nesting (aliases counted expanded; checked before each level is entered,
+    so the recursion never goes deeper than MAX_YAML_DEPTH), and refuses an
+    alias to a node that contains it (a cycle, which the walk in
+    :func:`_plain` would follow forever).
+    """
+
+    def __init__(self, text: str) -> None:
+        super().__init__(text)
+        self.expanded = 0  # nodes the tree expands to, so far
+        self.depth = 0  # nesting of the node being composed
+        self.deepest = 0  # deepest (expanded) level met in the current subtree
+        self.open_anchors: set[str] = set()
+        self.anchor_sizes: dict[str, tuple[int, int]] = {}  # anchor -> (expanded nodes, height)
+
+    def _grow(self, nodes: int, depth: int, mark: Any) -> None:
+        self.expanded += nodes
+        self.deepest = max(self.deepest, depth)
+        if self.expanded > limits.MAX_YAML_NODES:
+            raise _yaml_error(
+                f"the YAML expands to more than {limits.MAX_YAML_NODES:,} values (every alias counted in full); "
+                "a scene needs a few hundred (halfslip.limits.MAX_YAML_NODES)", mark)
+        if depth > limits.MAX_YAML_DEPTH:
+            raise _yaml_error(
+                f"lists and mappings nest deeper than {limits.MAX_YAML_DEPTH} levels (aliases counted expanded); "
+                "a scene nests 5 (halfslip.limits.MAX_YAML_DEPTH)", mark)
+
+    def compose_node(self, parent: Any, index: Any) -> Any:
+        event = self.peek_event()
+        if isinstance(event, yaml.AliasEvent):
+            if event.anchor in self.open_anchors:
+                raise _yaml_error(f"the alias *{excerpt(event.anchor)[1:-1]} refers to a node that contains it "
+                                  "(a cycle)", event.start_mark)
+            node = super().compose_node(parent, index)  # PyYAML refuses an undefined alias
+            nodes, height = self.anchor_sizes.get(event.anchor, (1, 1))
+            self._grow(nodes, self.depth + height, event.start_mark)
+            return node
+        anchor = getattr(event, "anchor", None)
+        before, outer_deepest = self.expanded, self.deepest
+        self.depth += 1
+        self.deepest = self.depth
+        self._grow(1, self.depth, event.start_mark)
+        if anchor is not None:
+            self.open_anchors.add(anchor)
+        node = super().compose_node(parent, index)
+        if anchor is not None:
+            self.open_anchors.discard(anchor)
+            self.anchor_sizes[anchor] = (self.expanded - before, self.deepest - self.depth + 1)
+        self.depth -= 1
+        self.deepest = max(outer_deepest, self.deepest)
+        return node
+
 
 def _read_yaml(text: str) -> tuple[Any, dict[str, int]]:
     """Parse YAML safely into plain data and a table field path -> line.
 
     The line of a mapping entry is the line of its key; of a list item, the
-    line where the item starts; the top level is ``""``.
+    line where the item starts; the top level is ``""``. The YAML may use
+    anchors, aliases and merge keys (``<<: *defaults``) within the limits of
+    :class:`_BoundedLoader`; every failure is a one-line HalfslipInputError.
     """
-    loader = yaml.SafeLoader(text)
+    loader = None
     try:
+        loader = _BoundedLoader(text)  # the reader refuses non-printable characters here already
         root = loader.get_single_node()
         lines: dict[str, int] = {}
         if root is None:
             return None, lines
         lines[""] = root.start_mark.line + 1
         return _plain(root, "", lines, loader), lines
+    except yaml.reader.ReaderError as error:
+        where = text.count("\n", 0, error.position) + 1 if isinstance(error.position, int) else None
+        character = chr(error.character) if isinstance(error.character, int) else str(error.character)
+        raise HalfslipInputError(
+            f"invalid YAML: the character {excerpt(character)} (#x{ord(character[:1] or ' '):04x}) is not allowed "
+            "in a YAML file; remove it", line=where) from None
     except yaml.MarkedYAMLError as error:
         mark = error.problem_mark or error.context_mark
         reason = "; ".join(part for part in (error.context, error.problem) if part)
         if error.context_mark is not None and mark is not None and error.context_mark.line != mark.line:
             reason += f" (the construct began on line {error.context_mark.line + 1})"
-        raise HalfslipInputError(f"invalid YAML: {reason}", line=mark.line + 1 if mark else None) from None
+        raise HalfslipInputError(f"invalid YAML: {excerpt(reason, 200)[1:-1]}",
+                                 line=mark.line + 1 if mark else None) from None
     except yaml.YAMLError as error:
-        raise HalfslipInputError(f"invalid YAML: {error}") from None
+        raise HalfslipInputError(f"invalid YAML: {excerpt(error, 200)[1:-1]}") from None
     finally:
-        loader.dispose()
+        if loader is not None:
+            loader.dispose()
 
 
 def _plain(node: yaml.Node, path: str, lines: dict[str, int], loader: yaml.SafeLoader) -> Any:
-    """Convert a YAML node to plain Python, recording the line of every field."""
+    """Convert a YAML node to plain Python, recording the line of every field.
+
+    The recursion is as deep as the nesting, which the loader has bounded.
+    """
     if isinstance(node, yaml.MappingNode):
         result = {}
+        merged = []
         for key_node, value_node in node.value:
             line = key_node.start_mark.line + 1
             if not isinstance(key_node, yaml.ScalarNode):
                 raise HalfslipInputError("keys must be plain names", line=line, field=path or None)
+            if key_node.tag == _MERGE_TAG:
+                merged.append((value_node, line))
+                continue
             key = key_node.value
             child = join(path, key)
             if key in result:
-                raise HalfslipInputError(f"duplicate key {key!r}", line=line, field=child)
+                raise HalfslipInputError(f"duplicate key {excerpt(key)}", line=line, field=child)
             lines[child] = line
             result[key] = _plain(value_node, child, lines, loader)
+        for value_node, line in merged:  # '<<: *a' or '<<: [*a, *b]': keys not given explicitly, first wins
+            sources = value_node.value if isinstance(value_node, yaml.SequenceNode) else [value_node]
+            for source in sources:
+                if not isinstance(source, yaml.MappingNode):
+                    raise HalfslipInputError("a merge key (<<) takes a mapping or a list of mappings",
+                                             line=line, field=path or None)
+                for key, value in _plain(source, path, {}, loader).items():
+                    if key not in result:
+                        lines.setdefault(join(path, key), line)
+                        result[key] = value
         return result
     if isinstance(node, yaml.SequenceNode):
         items = []
@@ -371,13 +668,39 @@ def _plain(node: yaml.Node, path: str, lines: dict[str, int], loader: yaml.SafeL
             lines[child] = item.start_mark.line + 1
             items.append(_plain(item, child, lines, loader))
         return items
-    value = loader.construct_object(node)
+    return _scalar(node, path, loader)
+
+
+def _scalar(node: yaml.ScalarNode, path: str, loader: yaml.SafeLoader) -> Any:
+    """A scalar node's value; numbers out of the float range are refused here."""
+    line = node.start_mark.line + 1
+    if node.tag in (_INT_TAG, _FLOAT_TAG) and len(node.value) > limits.MAX_NUMBER_DIGITS:
+        raise HalfslipInputError(
+            f"a number of {len(node.value):,} characters: at most {limits.MAX_NUMBER_DIGITS} are read "
+            "(the largest number is 1.8e308)", line=line, field=path or None)
+    try:
+        value = loader.construct_object(node)
+    except (ValueError, OverflowError, ArithmeticError) as error:  # e.g. the date 2024-13-45
+        raise HalfslipInputError(f"cannot read {excerpt(node.value)}: {excerpt(error, 80)[1:-1]}",
+                                 line=line, field=path or None) from None
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value).bit_length() > _FLOAT_BITS:
+        raise HalfslipInputError(f"{excerpt(node.value)} is out of range; the largest number is 1.8e308",
+                                 line=line, field=path or None)
     if isinstance(value, str) and node.style is None:
+        if len(value) > limits.MAX_NUMBER_DIGITS:
+            if _LONG_NUMBER.fullmatch(value):
+                raise HalfslipInputError(
+                    f"a number of {len(value):,} characters: at most {limits.MAX_NUMBER_DIGITS} are read "
+                    "(the largest number is 1.8e308)", line=line, field=path or None)
+            return value
         try:
             return float(value)
         except ValueError:
             return value
     return value
+
+
+_LONG_NUMBER = re.compile(r"[-+]?[0-9_]*\.?[0-9_]*(?:[eE][-+]?[0-9]+)?")
 
 
 def _line_of(field: str | None, lines: Mapping[str, int]) -> int | None:

@@ -16,6 +16,7 @@ import numpy as np
 import xarray as xr
 
 from .geometry import NormalProblem
+from .scene import check_run_bytes
 from .state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime
 
 METHODS = ("auto", "exact", "general")
@@ -232,7 +233,9 @@ def simulate(
     """
     if nodes is not None:
         scene = dataclasses.replace(scene, solver=dataclasses.replace(scene.solver, nodes=int(nodes)))
-    run = _Run(scene, choose_method(scene, method))
+    name = choose_method(scene, method)
+    check_run_bytes(scene, name)  # the scene was checked for its own method; this one may differ
+    run = _Run(scene, name)
     if resume is not None:
         run.restore(*resume)
     h = scene.history

@@ -55,8 +55,20 @@ import numpy as np
 import xarray as xr
 import yaml
 
-from .errors import HalfslipInputError, check_bool, check_count, check_mapping, check_number, describe, join
-from .scene import _line_of, _read_yaml, parse_scene, read_input_text
+from .errors import (
+    HalfslipInputError,
+    check_bool,
+    check_count,
+    check_mapping,
+    check_number,
+    describe,
+    EXCERPT_CHARS,
+    excerpt,
+    join,
+)
+from . import limits
+from .io import PATH_CHARS, read_input_text
+from .scene import _line_of, _read_yaml, parse_scene
 
 __all__ = [
     "SUMMARIES",
@@ -257,7 +269,7 @@ class Sweep:
                 message = f"{inner}" if error.file is not None else f"in the scene, {inner}"
         else:
             field = f"cases[{index}]" if self.kind == "cases" else "vary"
-            values = ", ".join(f"{path} = {_text(value)}" for path, value in overrides.items())
+            values = ", ".join(f"{path} = {_short(_text(value))}" for path, value in overrides.items())
             inner = HalfslipInputError(error.message, file=error.file, field=error.field)
             message = f"case {index} ({values}) makes the scene invalid: {inner}"
         return HalfslipInputError(message, file=file, line=self.line_of(field), field=field)
@@ -310,7 +322,7 @@ def _set_path(data: Any, path: str, value: Any) -> None:
         else:
             if not isinstance(node, dict):
                 what = walked or "the scene"
-                raise _PathError(f"{what} is {describe(node)}, not a mapping: cannot take field {token!r}", path)
+                raise _PathError(f"{what} is {describe(node)}, not a mapping: cannot take field {excerpt(token)}", path)
             if last:
                 node[token] = copy.deepcopy(value)
             else:
@@ -342,6 +354,11 @@ def _text(value: Any) -> str:
     return json.dumps(value, separators=(", ", ": "), default=repr)
 
 
+def _short(text: str) -> str:
+    """A value's text for a message: whole if short, else an :func:`~halfslip.errors.excerpt`."""
+    return text if len(text) <= EXCERPT_CHARS else excerpt(text)
+
+
 def load_sweep(path: str | os.PathLike) -> Sweep:
     """Read and check a sweep file.
 
@@ -361,7 +378,7 @@ def load_sweep(path: str | os.PathLike) -> Sweep:
         and field.
     """
     path = Path(path)
-    return parse_sweep(read_input_text(path, "sweep"), path=path)
+    return parse_sweep(read_input_text(path, "sweep", limits.MAX_SCENE_BYTES), path=path)
 
 
 def parse_sweep(
@@ -430,12 +447,9 @@ def _build_sweep(data: Any, lines: dict[str, int], base: Path, text: str, path: 
     if not isinstance(scene_name, str) or not scene_name:
         raise HalfslipInputError(f"expected the path of a scene file, got {describe(scene_name)}", field="scene")
     scene_path = base / scene_name
-    try:
-        scene_text = scene_path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise HalfslipInputError(f"no such scene file {str(scene_path)!r}", field="scene") from None
-    except (IsADirectoryError, UnicodeDecodeError, OSError) as error:
-        raise HalfslipInputError(f"cannot read the scene file {str(scene_path)!r}: {error}", field="scene") from None
+    if not scene_path.exists():
+        raise HalfslipInputError(f"no such scene file {excerpt(str(scene_path), PATH_CHARS)}", field="scene")
+    scene_text = read_input_text(scene_path, "scene", limits.MAX_SCENE_BYTES, field="scene")
     parse_scene(scene_text, path=scene_path)  # the base scene must be valid itself (its errors name it)
     scene_data, _ = _read_yaml(scene_text)
 
@@ -463,9 +477,12 @@ def _build_sweep(data: Any, lines: dict[str, int], base: Path, text: str, path: 
                 number = isinstance(value, (int, float)) and not isinstance(value, bool)
                 marker = float(value) if number else _text(value)
                 if marker in seen:
-                    raise HalfslipInputError(f"value {_text(value)} is listed twice", field=f"{field}[{i}]")
+                    raise HalfslipInputError(f"value {_short(_text(value))} is listed twice", field=f"{field}[{i}]")
                 seen.add(marker)
             axes.append(tuple(values))
+            cases = math.prod(len(values) for values in axes)  # exact integers: no overflow
+            if cases > limits.MAX_SWEEP_CASES:
+                raise _too_many_cases(cases, field)
         sweep = Sweep("grid", tuple(paths), tuple(axes), (), fixed, per_cycle, scene_path, scene_text,
                       scene_data, path, text, lines)
     else:
@@ -474,6 +491,8 @@ def _build_sweep(data: Any, lines: dict[str, int], base: Path, text: str, path: 
             raise HalfslipInputError(
                 f"expected a list of mappings path -> value, got {describe(cases)}", field="cases"
             )
+        if len(cases) > limits.MAX_SWEEP_CASES:
+            raise _too_many_cases(len(cases), "cases")
         checked, paths = [], {}
         for index, case in enumerate(cases):
             field = f"cases[{index}]"
@@ -488,10 +507,23 @@ def _build_sweep(data: Any, lines: dict[str, int], base: Path, text: str, path: 
     return sweep
 
 
+CASE_BYTES = 200
+"""Memory of one case in a sweep result: about ten numbers and a status text."""
+
+
+def _too_many_cases(count: int, field: str) -> HalfslipInputError:
+    """The error of a sweep with more than MAX_SWEEP_CASES cases, with its memory estimate."""
+    return HalfslipInputError(
+        f"the sweep would have {count:,} cases (a result of about {count * CASE_BYTES / 1e9:.3g} GB, and a run "
+        f"each); at most {limits.MAX_SWEEP_CASES:,} (halfslip.limits.MAX_SWEEP_CASES)",
+        field=field,
+    )
+
+
 def _check_path(key: Any, field: str) -> str:
     if not isinstance(key, str) or not _PATH.fullmatch(key):
         raise HalfslipInputError(
-            f"{key!r} is not a scene path; write fields joined by dots and list items in brackets, "
+            f"{excerpt(key)} is not a scene path; write fields joined by dots and list items in brackets, "
             "e.g. loads[1].cycles.Q.amplitude",
             field=field,
         )
@@ -513,6 +545,8 @@ def _values(spec: Any, field: str) -> list[Any]:
         start = check_number(args[0], f"{where}[0]")
         stop = check_number(args[1], f"{where}[1]")
         count = check_count(args[2], f"{where}[2]")
+        if count > limits.MAX_SWEEP_CASES:  # before numpy allocates the values
+            raise _too_many_cases(count, f"{where}[2]")
         if kind == "linspace":
             return [float(v) for v in np.linspace(start, stop, count)]
         if not (start > 0 and stop > 0):
@@ -535,11 +569,11 @@ def _check_overlaps(sweep: Sweep) -> None:
         for other in every[i + 1:]:
             if _related(one, other):
                 raise HalfslipInputError(
-                    f"overlaps {one!r}: one path lies inside the other", field=_first_field(sweep, other)
+                    f"overlaps {excerpt(one)}: one path lies inside the other", field=_first_field(sweep, other)
                 )
     for path in sweep.paths:
         if path in sweep.fixed:
-            raise HalfslipInputError(f"{path!r} is both varied and set", field=f"set.{path}")
+            raise HalfslipInputError(f"{excerpt(path)} is both varied and set", field=f"set.{path}")
 
 
 def _first_field(sweep: Sweep, path: str) -> str:

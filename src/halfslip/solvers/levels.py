@@ -23,6 +23,10 @@ from numpy.polynomial import chebyshev as C
 
 from ..geometry import Hertz, NormalProblem
 
+TABLE_HEADROOM = 1.05
+"""A tabulated profile's levels reach this multiple of the history's largest P (the
+scene reader checks that the contact still fits the profile there)."""
+
 _GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(24)
 
 
@@ -131,7 +135,7 @@ class TabulatedLevels(LevelIntegrals):
 
     def __init__(self, problem: NormalProblem, P_max: float, degree: int = 16, cells: int = 128):
         super().__init__(problem, P_max)
-        top = 1.05 * max(P_max, 1e-300)
+        top = TABLE_HEADROOM * max(P_max, 1e-300)
         graded = top / 64.0 * 0.5 ** np.arange(0, 40)[::-1]
         edges = np.concatenate([[0.0], graded, np.linspace(top / 64.0, top, cells + 1)[1:]])
         self.edges = edges
