@@ -677,11 +677,13 @@ def slip(ds: xr.Dataset, axes=None) -> Figure:
             axe.plot(x / kx, density / ke, color=ENERGY_LINE, lw=1.8, marker=marker, ms=3)
             axe.fill_between(x / kx, 0, np.where(known, density, 0.0) / ke, where=known,
                              color=ENERGY_LINE, alpha=0.15, lw=0)
-        for axis in grid[:, col]:
+        tops = [amplitude / kg] + ([density / ke] if has_q else [])
+        for axis, values in zip(grid[:, col], tops):
             if stick is not None:
                 axis.axvspan(stick[0] / kx, stick[1] / kx, color=STICK_COLOUR, alpha=0.5, lw=0)
             axis.grid(True, lw=0.3, alpha=0.5)
-            axis.set_ylim(bottom=0.0)
+            peak = float(np.nanmax(values)) if np.any(np.isfinite(values)) else 0.0
+            axis.set_ylim(0.0, 1.6 * peak if peak > 0 else 1.0)  # headroom for the notes
             axis.set_xlim((x[0] if low is None else low) / kx, (x[-1] if high is None else high) / kx)
         grid[-1, col].set_xlabel(f"x [{ux}]" + ("" if len(columns) == 1 else (" (left edge)" if col == 0 else " (right edge)")))
     grid[0, 0].set_ylabel(f"slip amplitude [{ug}]")
@@ -697,15 +699,16 @@ def slip(ds: xr.Dataset, axes=None) -> Figure:
         grid[1, 0].set_ylabel(f"energy {label} [{ue}]")
         known = np.isfinite(density)  # bridge stations without a value
         integral = float(np.trapezoid(np.interp(x, x[known], density[known]), x)) if known.any() else float("nan")
-        text = f"∫ (∮ q dg) dx over the stations = {integral:.4g} J/m\nsolver's energy {total:.4g} J/m"
+        kE, uE = unit_scale([integral, total], "J/m")
+        text = f"∫ (∮ q dg) dx over the stations:\n{integral / kE:.4g} {uE}; solver's energy {total / kE:.4g} {uE}"
         if total and np.isfinite(integral):
             gap = integral / total - 1.0
             text += f" ({gap:+.1%})"
             if abs(gap) > 0.02 and narrow:
                 kw, uw = unit_scale([spacing, *widths], "m")
-                text += (f"\nslip zones {widths[0] / kw:.3g} and {widths[1] / kw:.3g} {uw} wide, stations "
-                         f"{spacing / kw:.3g} {uw} apart:\ntoo few stations for the ∫; quote the solver's "
-                         "energy or raise output.points")
+                text += (f"\nslip zones {widths[0] / kw:.3g} and {widths[1] / kw:.3g} {uw} wide,\n"
+                         f"stations {spacing / kw:.3g} {uw} apart: too few for\nthe ∫ (the solver's "
+                         "number holds);\nraise output.points to resolve them")
         grid[1, peak_col].annotate(text, (where[0], 0.95), xycoords="axes fraction", fontsize=7.5,
                                    ha=where[1], va="top", bbox=_LABEL_BOX)
     warnings = []
@@ -775,7 +778,7 @@ def loop(ds: xr.Dataset, ax=None) -> Figure:
     post.check_result(ds)
     if "shift" not in ds.data_vars:
         raise HalfslipInputError("the loop figure needs the variable shift, which this result lacks")
-    fig, ax = _one_axes(ax)
+    fig, ax = _one_axes(ax, (9.0, 5.0))
     Q, slip_shift, compliance, labels, work, dissipation = _loop_data(ds)
     kQ, uQ = unit_scale(Q, "N/m")
     kd, ud = unit_scale(slip_shift - np.nanmean(slip_shift), "m")
@@ -797,17 +800,20 @@ def loop(ds: xr.Dataset, ax=None) -> Figure:
     ax.axhline(0.0, color="0.8", lw=0.6, zorder=0)
     ax.grid(True, lw=0.3, alpha=0.5)
     ax.set_title(_title(ds, "Q–δ hysteresis loop, elastic part removed"))
-    text = [f"C = {C:.4g} m per N/m (elastic, fitted at the reversals of Q)"]
+    text = [f"C = {C:.4g} m per N/m\n(elastic, fitted at the reversals of Q)"]
     if work is not None and len(work):
         area, solver = float(work[-1]), float(dissipation[-1])
         ke, ue = unit_scale([area, solver], "J/m")
-        text.append(f"loop area ∮ Q dδ = {area / ke:.4g} {ue} per cycle (last cycle)")
+        text.append(f"loop area ∮ Q dδ of the last cycle:\n{area / ke:.4g} {ue} per cycle")
         if solver:
-            text.append(f"solver's dissipation in it: {solver / ke:.4g} {ue} ({area / solver - 1:+.2%})")
+            text.append(f"solver's dissipation in it:\n{solver / ke:.4g} {ue} ({area / solver - 1:+.2%})")
         if np.any(np.ptp(post.select_cycle(ds)[["M", "sigma"]].to_array().values, axis=1) > 0):
-            text.append("M and σ vary too: the area is the work of Q alone")
-    ax.text(0.02, 0.98, "\n".join(text), transform=ax.transAxes, fontsize=8, va="top", ha="left", bbox=_LABEL_BOX)
-    ax.legend(fontsize=7.5, loc="lower right", framealpha=0.9)
+            text.append("M and σ vary too: the area is\nthe work of Q alone")
+    if str(ds.attrs.get("method", "")) == "general":
+        text.append("steps of a few nm: the shift's\nresolution at solver.nodes")
+    legend = ax.legend(fontsize=7.5, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0,
+                       title="\n".join(text), title_fontsize=7.5, framealpha=0.9)
+    legend._legend_box.align = "left"
     return fig
 
 
@@ -836,7 +842,7 @@ def stress(ds: xr.Dataset, at=None, axes=None) -> Figure:
     matplotlib.figure.Figure
     """
     post.check_result(ds, NEEDS["stress"], "the stress figure")
-    fig, grid, container = _panels(axes, 2, 1, (SIZE[0], 6.6), **({"sharex": True} if axes is None or
+    fig, grid, container = _panels(axes, 2, 1, (9.5, 6.6), **({"sharex": True} if axes is None or
                                                                      isinstance(axes, (Figure, SubFigure)) else {}))
     top, bottom = grid[0, 0], grid[1, 0]
     steps = _default_instants(ds) if not at else _nearest_steps(ds, at)
@@ -849,7 +855,7 @@ def stress(ds: xr.Dataset, at=None, axes=None) -> Figure:
     kP, uP = unit_scale(np.concatenate([ds["P"].values, ds["Q"].values]), "N/m")
     for colour, i, row in zip(_instant_colours(len(steps)), steps, snapshots):
         top.plot(x / kx, row / ks, color=colour, lw=1.6, label=_instant_label(ds, i, kP, uP))
-    top.legend(fontsize=7, loc="lower left", framealpha=0.9)
+    top.legend(fontsize=7.5, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, framealpha=0.9)
     top.set_ylabel(f"σxx(x, 0) [{us}]")
     bottom.fill_between(x / kx, envelope["min"].values / ks, envelope["max"].values / ks, color="#c6dbef",
                         lw=0, label="between min and max over the cycle")
@@ -858,9 +864,11 @@ def stress(ds: xr.Dataset, at=None, axes=None) -> Figure:
     bottom.plot(x / kx, envelope["range"].values / ks, color="#a50f15", lw=1.8, label="range: max − min")
     x_peak, peak = float(envelope["x_peak_range"]), float(envelope["peak_range"])
     bottom.plot(x_peak / kx, peak / ks, "v", color="#a50f15", ms=7)
-    bottom.annotate(f"largest range {peak / ks:.4g} {us} at x = {x_peak / kx:.4g} {ux}", (x_peak / kx, peak / ks),
-                    xytext=(8, 0), textcoords="offset points", fontsize=8, va="center", bbox=_LABEL_BOX)
-    bottom.legend(fontsize=7.5, loc="lower left", framealpha=0.9)
+    right_half = x_peak > 0.5 * (x[0] + x[-1])
+    bottom.annotate(f"largest range {peak / ks:.4g} {us}\nat x = {x_peak / kx:.4g} {ux}", (x_peak / kx, peak / ks),
+                    xytext=(-10 if right_half else 10, -4), textcoords="offset points", fontsize=8, va="top",
+                    ha="right" if right_half else "left", bbox=_LABEL_BOX)
+    bottom.legend(fontsize=7.5, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, framealpha=0.9)
     bottom.set_ylabel(f"σxx(x, 0) [{us}]")
     bottom.set_xlabel(f"x [{ux}]")
     stick = _stick_zone(ds, cycle)
