@@ -929,9 +929,9 @@ def ruiz(ds: xr.Dataset, axes=None) -> Figure:
         if np.any(y > 0):
             k = int(np.nanargmax(y))
             ax.plot(x[k] / kx, y[k], "v", color=colour, ms=7)
-            ax.annotate(f"peak {y[k]:.4g} {unit} at x = {x[k] / kx:.4g} {ux}", (x[k] / kx, y[k]), xytext=(0, 6),
-                        textcoords="offset points", fontsize=8, ha="center", va="bottom", bbox=_LABEL_BOX)
-            ax.set_ylim(0.0, 1.25 * float(np.nanmax(y)))
+            ax.text(0.98, 0.95, f"peak (▼) {y[k]:.4g} {unit} at x = {x[k] / kx:.4g} {ux}", transform=ax.transAxes,
+                    fontsize=8, ha="right", va="top", bbox=_LABEL_BOX)
+            ax.set_ylim(0.0, 1.35 * float(np.nanmax(y)))
         else:
             ax.set_ylim(0.0, 1.0)
             ax.text(0.5, 0.5, "zero everywhere: no slip, or no tension where it slips", transform=ax.transAxes,
@@ -944,7 +944,7 @@ def ruiz(ds: xr.Dataset, axes=None) -> Figure:
         ax.legend(fontsize=7.5, loc="upper left", framealpha=0.9)
     grid[1, 0].set_xlabel(f"x [{ux}]")
     _suptitle(container, grid, _title(ds, "Ruiz fretting parameters") + f"\n{_cycle_label(ds, cycle)}"
-              + "; σxx from the contact tractions (σ_B = 0); shaded: permanent stick zone")
+              + "\nσxx from the contact tractions (bulk stress σ_B = 0); shaded: permanent stick zone")
     return fig
 
 
@@ -1081,7 +1081,7 @@ def sweep_map(ds: xr.Dataset, axes=None) -> Figure:
     panels, note = _sweep_panels(part)
     cols = min(len(panels), 2)
     rows = math.ceil(len(panels) / cols)
-    fig, grid, container = _panels(axes, rows, cols, (5.0 * cols, 3.9 * rows))  # an odd last Axes stays empty
+    fig, grid, container = _panels(axes, rows, cols, (max(5.0 * cols, 7.0), 3.9 * rows + 0.6))  # an odd last Axes stays empty
     shown = dims[:2]
     for k, ax in enumerate(grid.flat):
         if k >= len(panels):
@@ -1129,7 +1129,9 @@ def sweep_map(ds: xr.Dataset, axes=None) -> Figure:
             ax.set_xlabel(xlabel)
             ax.grid(True, lw=0.3, alpha=0.5)
         ax.set_title(title, fontsize=9)
-    heading = str(ds.attrs.get("title", "halfslip sweep"))
+    import textwrap
+
+    heading = textwrap.fill(str(ds.attrs.get("title", "halfslip sweep")), 40 * cols + 20)
     extras = []
     if held:
         extras.append(", ".join(f"{d} = {part[d].item()}" for d in held))
@@ -1187,7 +1189,8 @@ def steady(ds: xr.Dataset, ax=None) -> Figure:
             lines.append(f"peak slip amplitude {float(ds['peak_slip_amplitude']) / kg:.4g} {ug}")
         ax.set_ylabel(f"slip amplitude [{ug}]")
         ax.set_xlim(x[0] / kx, x[-1] / kx)
-        ax.set_ylim(bottom=0.0)
+        peak = float(np.nanmax(amplitude)) / kg if known.any() else 0.0
+        ax.set_ylim(0.0, 1.6 * peak if peak > 0 else 1.0)  # headroom for the boxes
     else:
         ax.set_yticks([])
         ax.set_ylim(0.0, 1.0)
