@@ -986,7 +986,7 @@ def sweep(
         For a bad sweep file, a bad base scene, or an `output` holding a
         different sweep.
     """
-    from . import __version__
+    from ._version import __version__
     from .io import read_result, write_result
 
     if isinstance(spec_or_path, Sweep):
