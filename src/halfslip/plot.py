@@ -159,8 +159,6 @@ def _panels(axes, rows: int, cols: int, size, **kwargs):
         grid = np.array(fig.subplots(rows, cols, squeeze=False, **kwargs), dtype=object)
         container = fig
     elif isinstance(axes, (Figure, SubFigure)):
-        if isinstance(axes, Figure) and axes.canvas is None:
-            FigureCanvasAgg(axes)
         grid = np.array(axes.subplots(rows, cols, squeeze=False, **kwargs), dtype=object)
         container = axes
     else:
