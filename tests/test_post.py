@@ -434,6 +434,41 @@ def test_accessor_matches_functions(hertz_full):
     assert shift[-1] == pytest.approx(shift[0], abs=1e-9 * np.abs(shift).max())
 
 
+def test_stress_range_is_the_envelope_of_the_surface_stress_over_the_cycle(hertz_full):
+    ds = hertz_full
+    envelope = ds.halfslip.stress_range()
+    stress = post.surface_stress(post.select_cycle(ds))
+    np.testing.assert_array_equal(envelope["max"].values, stress.max("t").values)
+    np.testing.assert_array_equal(envelope["range"].values, (stress.max("t") - stress.min("t")).values)
+    assert float(envelope.peak_range) == pytest.approx(float(np.max(envelope["range"])))
+    # the tension peak's range sits just outside the contact, at the trailing edges
+    assert A_P * 0.9 < abs(float(envelope.x_peak_range)) < A_P * 1.1
+    for name in envelope.data_vars:
+        assert {"units", "long_name"} <= set(envelope[name].attrs)
+
+
+def test_elastic_compliance_reads_the_stuck_slope():
+    # a synthetic closed loop: elastic slope C plus Masing branches that leave each reversal flat,
+    # rising: k (Q + Qa)^2 - 2 k Qa^2, falling: 2 k Qa^2 - k (Qa - Q)^2 (continuous at +-Qa);
+    # width 4 k Qa^2 = 3 % of the elastic shift, as on hertz_pad
+    C, Qa = 3.0e-11, 1.0e4
+    k = 0.03 * C * Qa / (4 * Qa**2)
+    theta = np.linspace(0.0, 2 * np.pi, 201)
+    Q = Qa * np.sin(theta)
+    rising = np.cos(theta) >= 0
+    hysteresis = np.where(rising, k * (Q + Qa) ** 2 - 2 * k * Qa**2, 2 * k * Qa**2 - k * (Qa - Q) ** 2)
+    shift = C * Q + hysteresis
+    assert post.elastic_compliance(Q, shift) == pytest.approx(C, rel=2e-3)
+    assert abs(np.polyfit(Q, shift, 1)[0] / C - 1) > 5e-3  # a straight fit through the loop would not do
+    stuck = np.ones_like(Q, dtype=int)  # full stick throughout: the least-squares slope, exactly
+    assert post.elastic_compliance(Q, C * Q + 1e-6, stuck) == pytest.approx(C, rel=1e-9)
+
+
+def test_accessor_draws_nothing():
+    # post computes, halfslip.plot draws: ds.halfslip.plot(...) is gone (README, migration notes)
+    assert not hasattr(post.HalfslipAccessor, "plot")
+
+
 # ---------------------------------------------------------------------------
 # files
 

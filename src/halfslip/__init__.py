@@ -3,8 +3,6 @@
 Public names are listed here explicitly; see docs/interface.md for the
 user-facing contract (scene YAML, command line, result files).
 """
-from importlib.metadata import PackageNotFoundError, version
-
 from .errors import HalfslipInputError
 from .geometry import Hertz, Material, NormalProblem, RoundedPunch, TabulatedProfile
 from .histories import LoadHistory, Segment
@@ -13,11 +11,7 @@ from .simulator import simulate
 from .steady import steady_state
 from .sweep import sweep
 from . import post  # registers the ds.halfslip accessor
-
-try:
-    __version__ = version("halfslip")
-except PackageNotFoundError:
-    __version__ = "0.1.0"
+from ._version import __version__
 
 __all__ = [
     "HalfslipInputError",

@@ -491,21 +491,29 @@ def _steady(scene: Scene, segment: int | None, out, steady_state) -> None:
 @click.option("-o", "--output", "output", metavar="FIG.png|FOLDER",
               help="A figure file (one kind, or several as FIG-<kind>.png) or a folder; "
                    "default: OUT-<kind>.png next to OUT.h5.")
-@click.option("--kind", "kinds", multiple=True, type=click.Choice(["trajectory", "map", "tractions", "slip"]),
-              help="Figure kind (repeat for several; default: all the stored fields allow).")
+@click.option("--kind", "kinds", multiple=True,
+              type=click.Choice(["trajectory", "map", "tractions", "slip", "loop", "stress", "ruiz", "loads",
+                                 "sweep", "steady"]),
+              help="Figure kind (repeat for several; default: all the file allows). Runs: trajectory, map, "
+                   "tractions, slip, loop, stress, ruiz, loads; a sweep file: sweep; a steady file: steady.")
 @click.option("--at", "at", multiple=True, metavar="T",
-              help="Time [s] of a tractions snapshot (repeat, or separate with commas).")
+              help="Time [s] of a tractions / stress snapshot (repeat, or separate with commas).")
 def plot(result_file: str, output: str | None, kinds: tuple, at: tuple) -> None:
-    """Pictures of a run: loading path, stick-slip map, tractions, slip and energy.
+    """Pictures of a halfslip file: a run, a sweep result or a steady-state file.
 
-    Prints the path of every figure written. Bad input (missing file, not a
-    halfslip result, a kind needing fields the run did not store) exits 2.
+    The file's kind is read from its variables and attributes. A run gets
+    the loading path, stick-slip map, tractions, slip and energy, Q-delta
+    loop, surface stress, Ruiz parameters and loads; a sweep result its maps
+    (or curves) over the varied fields; a steady-state file (``halfslip
+    steady -o``) its permanent stick zone and slip amplitude. Prints the path
+    of every figure written. Bad input (missing file, not a halfslip file, a
+    kind the file cannot give) exits 2 with one line.
     """
     from pathlib import Path
 
     from . import plot as plots
     from .io import read_result
-    from .post import check_result
+    from .post import check_result, result_kind
 
     source = Path(result_file)
     if not source.is_file():
@@ -516,10 +524,13 @@ def plot(result_file: str, output: str | None, kinds: tuple, at: tuple) -> None:
         raise HalfslipInputError(f"not a halfslip result (cannot read it: {type(error).__name__})",
                                  file=result_file) from None
     ds.encoding["source"] = str(source)
-    try:
-        check_result(ds)
-    except HalfslipInputError as error:
-        raise error.located(result_file, None) from None
+    kind = result_kind(ds)
+    if kind is None:
+        try:
+            check_result(ds)
+        except HalfslipInputError as error:
+            raise error.located(result_file, None) from None
+        raise HalfslipInputError("not a halfslip result", file=result_file)
     times = []
     for text in at:
         for part in filter(None, (piece.strip() for piece in text.split(","))):
@@ -528,22 +539,20 @@ def plot(result_file: str, output: str | None, kinds: tuple, at: tuple) -> None:
             except ValueError:
                 raise HalfslipInputError(f"expected a time in seconds, got {part!r}", field="--at") from None
     chosen = list(kinds) if kinds else None
-    if chosen is None:
-        for kind in plots.KINDS:
-            missing = [name for name in plots.NEEDS[kind] if name not in ds.data_vars]
+    if chosen is None and kind == "run":
+        for name in plots.KINDS:
+            missing = [field for field in plots.NEEDS[name] if field not in ds.data_vars]
             if missing:
-                click.echo(f"halfslip: note: no {kind} figure: the run did not store {', '.join(missing)}", err=True)
+                click.echo(f"halfslip: note: no {name} figure: the run did not store {', '.join(missing)}", err=True)
     if not ds.attrs.get("complete", 1):
-        click.echo("halfslip: note: the run is unfinished; the figures show the steps done", err=True)
+        click.echo(f"halfslip: note: the {kind} is unfinished; the figures show what is done", err=True)
     out = Path(output) if output else source.parent
     try:
-        written = plots.plot_run(ds, out, kinds=chosen, at=times or None)
+        written = plots.write_figures(ds, out, kinds=chosen, at=times or None)
     except HalfslipInputError as error:
         raise error.located(result_file, None) from None
     for path in written:
         click.echo(str(path))
-
-
 
 
 @main.command(name="sweep")

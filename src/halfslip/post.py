@@ -30,6 +30,11 @@ time -- gets back the time it ends the marched cycle at.
 
 Functions taking ``cycle`` accept an index into that list (negative from the
 end, default -1: the last full cycle) or ``None`` for the whole run.
+
+This module computes; :mod:`halfslip.plot` draws (it imports this module,
+never the other way round). The helpers the figures need are public here:
+:func:`friction`, :func:`timeline`, :func:`loop_integral`,
+:func:`elastic_compliance`, :func:`result_kind`.
 """
 from __future__ import annotations
 
@@ -47,14 +52,21 @@ __all__ = [
     "check_result",
     "cycles",
     "dissipation_per_cycle",
+    "elastic_compliance",
+    "friction",
     "hysteresis_loops",
+    "loop_integral",
     "loop_tangent_point",
     "peak",
     "permanent_stick",
+    "result_kind",
     "ruiz",
     "select_cycle",
     "slip_amplitude",
+    "stress_range",
     "surface_stress",
+    "timeline",
+    "Timeline",
 ]
 
 REQUIRED_VARIABLES = ("P", "Q", "M", "sigma", "contact_left", "contact_right", "stick_left", "stick_right", "regime")
@@ -106,7 +118,37 @@ def check_result(ds: xr.Dataset, needs: Iterable[str] = (), what: str = "this") 
     return ds
 
 
-def _friction(ds: xr.Dataset) -> float:
+def result_kind(ds: xr.Dataset) -> str | None:
+    """What kind of halfslip file a dataset is, from its variables and attributes.
+
+    Returns
+    -------
+    {'run', 'sweep', 'steady'} or None
+        ``'run'``: a result of :func:`halfslip.simulate` / ``halfslip run``
+        (passes :func:`check_result`); ``'sweep'``: a result of
+        :func:`halfslip.sweep` (attribute ``sweep_hash`` and variable
+        ``done``); ``'steady'``: a dataset of :func:`halfslip.steady_state` /
+        ``halfslip steady -o`` (scalars ``permanent_stick_left``,
+        ``permanent_stick_right``, ``regime`` and the attribute ``method``,
+        no time axis); None for anything else.
+    """
+    if not isinstance(ds, xr.Dataset):
+        return None
+    if "sweep_hash" in ds.attrs and "done" in ds.variables:
+        return "sweep"
+    steady_names = ("permanent_stick_left", "permanent_stick_right", "regime")
+    if (all(name in ds.data_vars for name in steady_names) and "t" not in ds.dims
+            and all(ds[name].ndim == 0 for name in steady_names) and "method" in ds.attrs):
+        return "steady"
+    try:
+        check_result(ds)
+    except HalfslipInputError:
+        return None
+    return "run"
+
+
+def friction(ds: xr.Dataset) -> float:
+    """The Coulomb friction coefficient f of a run (attribute ``friction``, else from its scene)."""
     if "friction" in ds.attrs:
         return float(ds.attrs["friction"])
     return float(_scene(ds).friction)
@@ -180,7 +222,7 @@ def _skipped_per_segment(ds: xr.Dataset) -> dict[int, int]:
 
 
 @dataclass(frozen=True)
-class _Timeline:
+class Timeline:
     """The stored times, with skipped cycles taken out.
 
     When the simulator skips the last ``k`` cycles of a steady segment it stores
@@ -197,8 +239,11 @@ class _Timeline:
     spacing: dict  # segment index -> longest regular gap between stored steps [s]
 
 
-def _timeline(ds: xr.Dataset, strict: bool = True) -> _Timeline:
-    """The timeline of a run; without `strict` an unreadable scene gives the plain times."""
+def timeline(ds: xr.Dataset, strict: bool = True) -> Timeline:
+    """The stored times of a run with its skipped cycles located (:class:`Timeline`).
+
+    Without `strict` an unreadable scene gives the plain times (no cycles, no skips).
+    """
     t = np.asarray(ds["t"].values, float)
     t_eff = t.copy()
     repeats = np.ones(t.size, np.int64)
@@ -228,7 +273,7 @@ def _timeline(ds: xr.Dataset, strict: bool = True) -> _Timeline:
             for c in range(int(segment.count)):
                 t0 = segment.t_start + c * period
                 windows.append(_Window(t0, t0 + period, index))
-    return _Timeline(t, t_eff, repeats, windows, spacing)
+    return Timeline(t, t_eff, repeats, windows, spacing)
 
 
 def _period_windows(t: np.ndarray, period: float, start: float | None) -> list[_Window]:
@@ -280,7 +325,7 @@ def cycles(ds: xr.Dataset, period: float | None = None, start: float | None = No
     gives it back the time it ends the marched cycle at.
     """
     check_result(ds)
-    line = _timeline(ds, strict=period is None)
+    line = timeline(ds, strict=period is None)
     t_eff = line.t_eff
     if period is None:
         windows = line.windows
@@ -366,7 +411,7 @@ def select_cycle(ds: xr.Dataset, cycle: int | None = -1, period: float | None = 
     i0, i1, label = _cycle_window(ds, cycle, period)
     out = ds.isel(t=slice(i0, i1 + 1))
     if cycle is not None:
-        t_eff = _timeline(ds, strict=False).t_eff[i0 : i1 + 1]
+        t_eff = timeline(ds, strict=False).t_eff[i0 : i1 + 1]
         out = out.assign_coords(t=("t", t_eff, dict(ds["t"].attrs)))
     out.attrs = {**ds.attrs, "selection": label}
     return out
@@ -412,8 +457,20 @@ def slip_amplitude(ds: xr.Dataset, cycle: int | None = -1, period: float | None 
     )
 
 
-def _loop_integral(y: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """Trapezoid of y dx along axis 0: sum 0.5 (y_k + y_k+1) (x_k+1 - x_k); NaN increments count 0."""
+def loop_integral(y: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Trapezoid of y dx along axis 0: sum 0.5 (y_k + y_k+1) (x_k+1 - x_k); NaN increments count 0.
+
+    Parameters
+    ----------
+    y, x : ndarray, shape (n, ...)
+        Values along a path of n stored steps (e.g. q and slip, or Q and shift).
+
+    Returns
+    -------
+    ndarray, shape (...)
+        The line integral of y dx along the path (a loop integral when the
+        path closes).
+    """
     dx = np.diff(x, axis=0)
     ymid = 0.5 * (y[1:] + y[:-1])
     return np.nansum(np.where(np.isfinite(dx) & np.isfinite(ymid), ymid * dx, 0.0), axis=0)
@@ -461,7 +518,7 @@ def dissipation_per_cycle(ds: xr.Dataset, period: float | None = None) -> xr.Dat
     )
     if "q" in ds.data_vars and "slip" in ds.data_vars:
         q, g = ds["q"].values, ds["slip"].values
-        density = np.array([_loop_integral(q[a : b + 1], g[a : b + 1]) for a, b in zip(i0, i1)]).reshape(len(i0), ds.sizes["x"])
+        density = np.array([loop_integral(q[a : b + 1], g[a : b + 1]) for a, b in zip(i0, i1)]).reshape(len(i0), ds.sizes["x"])
         for row, (a, b) in enumerate(zip(i0, i1)):  # loaded stations without any slip value: unknown, not zero
             unknown = np.all(~np.isfinite(g[a : b + 1]), axis=0) & np.any(q[a : b + 1] != 0, axis=0)
             density[row, unknown] = np.nan
@@ -491,7 +548,14 @@ def hysteresis_loops(ds: xr.Dataset, period: float | None = None) -> xr.Dataset:
         cycle's start (both ends included, so a loop closes). Cycles with
         fewer stored steps than the longest are padded with NaN.
         ``work`` (cycle) [J/m]: the loop integral of Q d(shift) (trapezoid),
-        equal to the dissipation per cycle at constant P (energy balance).
+        equal to the dissipation per cycle at constant P, M and sigma (energy
+        balance over a closed cycle).
+        ``compliance`` (cycle) [m/(N/m)]: the elastic (fully stuck) tangential
+        compliance C fitted by :func:`elastic_compliance`, and
+        ``shift_slip`` (cycle, step) [m] = shift - C Q: the shift with its
+        elastic part removed, which opens the loop (the raw Q - shift loop is
+        nearly a straight line). Its loop integral equals ``work``, since the
+        loop integral of C Q dQ vanishes on a closed loop.
 
     Notes
     -----
@@ -504,7 +568,7 @@ def hysteresis_loops(ds: xr.Dataset, period: float | None = None) -> xr.Dataset:
     table = cycles(ds, period=period)
     i0, i1 = table["i_start"].values, table["i_stop"].values
     length = int(np.max(i1 - i0) + 1) if len(i0) else 0
-    t_eff = _timeline(ds, strict=False).t_eff
+    t_eff = timeline(ds, strict=False).t_eff
     data = {}
     for name in ("Q", "shift", "P", "t"):
         values = t_eff if name == "t" else ds[name].values
@@ -517,9 +581,100 @@ def hysteresis_loops(ds: xr.Dataset, period: float | None = None) -> xr.Dataset:
         coords={"cycle": table["cycle"], "step": ("step", np.arange(length), _attrs("1", "stored step within the cycle"))},
         attrs={"source": table.attrs["source"], "shift_datum": ds.attrs.get("shift_datum", np.nan)},
     )
-    work = np.array([_loop_integral(data["Q"][k], data["shift"][k]) for k in range(len(i0))])
+    work = np.array([loop_integral(data["Q"][k], data["shift"][k]) for k in range(len(i0))])
     loops["work"] = ("cycle", work, _attrs("J/m", "loop integral of Q d(shift) over the cycle"))
+    regime = ds["regime"].values
+    compliance = np.array([
+        elastic_compliance(data["Q"][k, : b - a + 1], data["shift"][k, : b - a + 1], regime[a : b + 1])
+        for k, (a, b) in enumerate(zip(i0, i1))
+    ])
+    loops["compliance"] = ("cycle", compliance, _attrs("m/(N/m)", "elastic (fully stuck) tangential compliance C"))
+    loops["shift_slip"] = (("cycle", "step"), data["shift"] - compliance[:, None] * data["Q"],
+                           _attrs("m", "shift less its elastic part C Q"))
     return loops
+
+
+def elastic_compliance(Q: np.ndarray, shift: np.ndarray, regime: np.ndarray | None = None) -> float:
+    """The elastic (fully stuck) tangential compliance d(shift)/dQ of a Q - shift loop.
+
+    Fitted, in this order of preference, from
+
+    1. the steps taken in full stick (``regime`` 1, where shift = C Q + const
+       exactly): least-squares slope of their increments;
+    2. the steps right after each reversal of Q (Mindlin: at a reversal the
+       whole contact sticks and the slip zones grow again from the edges, so
+       the loop leaves the reversal point with the elastic slope): least
+       squares over the steps until Q has moved :data:`REVERSAL_REACH` of its
+       range, the median over the reversals; a closed loop is followed round,
+       so a reversal at its start counts;
+    3. the least-squares slope of the whole loop (no reversal, no stick).
+
+    Parameters
+    ----------
+    Q, shift : ndarray, shape (n,)
+        Shear force [N/m] and rigid shift [m] at the stored steps of a cycle.
+    regime : ndarray, shape (n,), optional
+        Regime of each step (1 = full stick).
+
+    Returns
+    -------
+    float
+        C [m/(N/m)]; NaN with fewer than two steps in which Q changes.
+
+    Notes
+    -----
+    With P varying in the cycle the shift also moves with P, and the slope
+    read at the reversals includes that; the figure's axis label says what is
+    plotted (shift - C Q), not that it is pure slip.
+    """
+    Q = np.asarray(Q, float)
+    shift = np.asarray(shift, float)
+    keep = np.isfinite(Q) & np.isfinite(shift)
+    if regime is not None:
+        regime = np.asarray(regime)[keep]
+    Q, shift = Q[keep], shift[keep]
+    if Q.size < 2:
+        return float("nan")
+    dQ, ds_ = np.diff(Q), np.diff(shift)
+    scale = float(np.max(np.abs(Q))) or 1.0
+    moving = np.abs(dQ) > 1e-9 * scale
+    if regime is not None:
+        stuck = moving & (regime[1:] == 1)
+        if np.count_nonzero(stuck) >= 2:
+            return float(np.sum(dQ[stuck] * ds_[stuck]) / np.sum(dQ[stuck] ** 2))
+    if not np.any(moving):
+        return float("nan")
+    closed = abs(Q[-1] - Q[0]) <= 1e-6 * scale
+    if closed:  # go round the loop twice so that a reversal at its start has steps after it
+        Q, shift = np.concatenate([Q, Q[1:]]), np.concatenate([shift, shift[1:]])
+    steps = np.flatnonzero(np.abs(np.diff(Q)) > 1e-9 * scale)
+    signs = np.sign(np.diff(Q)[steps])
+    starts = [int(steps[k]) for k in range(1, signs.size) if signs[k] != signs[k - 1]]
+    if closed:
+        starts = [k for k in starts if k < len(Q) // 2 + 1]
+    reach = REVERSAL_REACH * float(np.ptp(Q))
+    slopes = []
+    for r in starts:  # least squares over the steps until Q has moved `reach` from the reversal
+        end = r + 1
+        while end + 1 < len(Q) and abs(Q[end] - Q[r]) < reach and np.sign(Q[end + 1] - Q[end]) == np.sign(Q[r + 1] - Q[r]):
+            end += 1
+        dq, dd = Q[r : end + 1] - Q[r], shift[r : end + 1] - shift[r]
+        if np.sum(dq**2) > 0:
+            slopes.append(float(np.sum(dq * dd) / np.sum(dq**2)))
+    if slopes:
+        return float(np.median(slopes))
+    dQm, dsm = Q - Q.mean(), shift - shift.mean()
+    return float(np.sum(dQm * dsm) / np.sum(dQm**2))
+
+
+REVERSAL_REACH = 0.05
+"""How far (fraction of the cycle's range of Q) past a reversal :func:`elastic_compliance` fits the elastic slope.
+
+Far enough to average the shift's step-to-step scatter of the general
+solver (about 1 % of a step's increment), near enough that the slip zones
+regrowing from the edges add little: on hertz_pad the fitted C is 0.06 %
+above the first step's slope (the loop's width is 3 % of the elastic shift).
+"""
 
 
 def permanent_stick(ds: xr.Dataset, cycle: int | None = -1, period: float | None = None) -> xr.Dataset:
@@ -563,7 +718,7 @@ def loop_tangent_point(ds: xr.Dataset, cycle: int | None = -1, period: float | N
         [N/m].
     """
     check_result(ds)
-    f = _friction(ds)
+    f = friction(ds)
     window = select_cycle(ds, cycle, period)
     P, Q = window["P"].values, window["Q"].values
     upper = float(np.min(Q + f * P))
@@ -693,13 +848,57 @@ def surface_stress(ds: xr.Dataset, sigma_B: float | xr.DataArray = 0.0, edge_nod
     return out
 
 
+def stress_range(ds: xr.Dataset, cycle: int | None = -1, period: float | None = None,
+                 sigma_B: float | xr.DataArray = 0.0) -> xr.Dataset:
+    """Envelope of the surface direct stress sigma_xx(x, 0) over one cycle.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result with the fields ``p`` and ``q``.
+    cycle, period
+        See :func:`select_cycle` (None: the whole run).
+    sigma_B : float or DataArray over t
+        Bulk stress of the substrate [Pa] (see :func:`surface_stress`).
+
+    Returns
+    -------
+    xarray.Dataset
+        ``max``, ``min`` and ``range`` = max - min (x) [Pa] over the stored
+        steps of the cycle (only steps that are stored count: the envelope of
+        a coarsely stored cycle is a lower bound), and scalars
+        ``peak_range`` [Pa], ``x_peak_range`` [m].
+    """
+    check_result(ds, ("p", "q"), "the stress range")
+    window = select_cycle(ds, cycle, period)
+    stress = surface_stress(window, sigma_B)
+    top, bottom = stress.max("t"), stress.min("t")
+    spread = (top - bottom).values
+    k = int(np.nanargmax(spread)) if np.any(np.isfinite(spread)) else 0
+    return xr.Dataset(
+        {
+            "max": ("x", top.values, _attrs("Pa", "cycle maximum of sigma_xx(x, 0)")),
+            "min": ("x", bottom.values, _attrs("Pa", "cycle minimum of sigma_xx(x, 0)")),
+            "range": ("x", spread, _attrs("Pa", "range (max - min) of sigma_xx(x, 0) over the cycle")),
+            "peak_range": ((), float(spread[k]), _attrs("Pa", "largest range of sigma_xx(x, 0)")),
+            "x_peak_range": ((), float(ds["x"].values[k]), _attrs("m", "where the range of sigma_xx(x, 0) peaks")),
+        },
+        coords={"x": ds["x"]},
+        attrs={"cycle": window.attrs["selection"]},
+    )
+
+
 def ruiz(ds: xr.Dataset, cycle: int | None = -1, period: float | None = None, sigma_B: float = 0.0) -> xr.Dataset:
     """Ruiz fretting-fatigue parameter along the surface over one cycle.
 
         ruiz(x) = max over the cycle of [max(sigma_xx, 0) |q|] * slip amplitude
 
     (the tensile part of the surface stress only: compression does not open a
-    crack; Ruiz, Boddington and Chen 1984).
+    crack; Ruiz, Boddington and Chen 1984), the three-factor form sigma tau
+    delta that Nowell and Hills call the fretting fatigue damage parameter.
+    The two-factor form tau delta (the frictional work parameter, which
+    correlates with where fretting cracks start and with wear) is returned as
+    ``shear_slip``.
 
     Parameters
     ----------
@@ -715,7 +914,9 @@ def ruiz(ds: xr.Dataset, cycle: int | None = -1, period: float | None = None, si
     xarray.Dataset
         ``ruiz`` (x) [Pa^2 m], ``stress_shear`` (x) [Pa^2] (the cycle maximum
         of max(sigma_xx, 0) |q|), ``slip_amplitude`` (x) [m], and scalars
-        ``peak`` [Pa^2 m], ``x_peak`` [m] (NaN when the parameter is zero everywhere).
+        ``peak`` [Pa^2 m], ``x_peak`` [m] (NaN when the parameter is zero everywhere),
+        ``shear_slip`` (x) [J/m^2 = Pa m]: the cycle maximum of abs(q) times
+        the slip amplitude (two-factor form).
     """
     check_result(ds, ("p", "q", "slip"), "the Ruiz parameter")
     window = select_cycle(ds, cycle, period)
@@ -736,6 +937,8 @@ def ruiz(ds: xr.Dataset, cycle: int | None = -1, period: float | None = None, si
             "slip_amplitude": amplitude,
             "peak": ((), top, _attrs("Pa^2 m", "peak of the Ruiz parameter")),
             "x_peak": ((), where, _attrs("m", "where the Ruiz parameter peaks")),
+            "shear_slip": ("x", np.max(np.abs(window["q"].values), axis=0) * np.nan_to_num(amplitude.values),
+                           _attrs("J/m^2", "two-factor Ruiz parameter: cycle maximum of abs(q) times slip amplitude")),
         },
         coords={"x": ds["x"]},
         attrs={"cycle": window.attrs["selection"]},
@@ -813,8 +1016,8 @@ class HalfslipAccessor:
     def loop_tangent_point(self, cycle: int | None = -1, period: float | None = None) -> tuple[float, float]:
         return loop_tangent_point(self._ds, cycle, period)
 
-    def plot(self, out, kinds=None, at=None):
-        """Write figures of the run (:func:`halfslip.plot.plot_run`)."""
-        from .plot import plot_run
+    def stress_range(self, cycle: int | None = -1, period: float | None = None, sigma_B: float = 0.0) -> xr.Dataset:
+        return stress_range(self._ds, cycle, period, sigma_B)
 
-        return plot_run(self._ds, out, kinds=kinds, at=at)
+    def kind(self) -> str | None:
+        return result_kind(self._ds)

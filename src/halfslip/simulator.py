@@ -399,7 +399,7 @@ class _Run:
             self._store(Regime(int(regime[-1])))
 
     def dataset(self, complete: int, elapsed: float) -> xr.Dataset:
-        from . import __version__
+        from ._version import __version__
 
         ds = _dataset(self.rec, self.save)
         scene = self.scene

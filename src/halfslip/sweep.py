@@ -1020,7 +1020,7 @@ def sweep(
         For a bad sweep file, a bad base scene, or an `output` holding a
         different sweep.
     """
-    from . import __version__
+    from ._version import __version__
     from .io import read_result, write_result
 
     if isinstance(spec_or_path, Sweep):
@@ -1306,16 +1306,10 @@ def _run_dask(spec: Sweep, pending: list[int], keep_full: bool, on_result, sched
 
 
 def plot_sweep(ds: xr.Dataset, path: str | os.PathLike | None = None):
-    """Pictures of a sweep result: maps over two varied fields, curves over one.
+    """Pictures of a sweep result: :func:`halfslip.plot.sweep_map`, saved to `path` if given.
 
-    Panels: size of the permanent stick zone (``permanent_stick_right -
-    permanent_stick_left``; 0 where nothing sticks permanently), regime,
-    dissipation per cycle and peak slip amplitude (panels whose values are all
-    NaN are left out). With two grid dimensions each panel is a map over
-    them (first dimension on the y axis); with one, a curve; with more, the
-    extra dimensions are held at their first value (named in the title);
-    explicit cases are drawn against the case number. Failed and pending
-    cases are blank.
+    Kept here for scripts written against halfslip 0.1; the drawing lives in
+    :mod:`halfslip.plot` (``halfslip plot MAP.h5`` draws it too).
 
     Parameters
     ----------
@@ -1329,67 +1323,9 @@ def plot_sweep(ds: xr.Dataset, path: str | os.PathLike | None = None):
     matplotlib.figure.Figure
         Made without pyplot (no global state, Agg canvas).
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
+    from .plot import DPI, sweep_map
 
-    if not is_sweep_result(ds):
-        raise ValueError("not a sweep result (no sweep_hash attribute or done variable)")
-    dims = [d for d in ds["done"].dims]
-    held = {d: 0 for d in dims[2:]}
-    part = ds.isel(held) if held else ds
-    ok = part["status"] == "ok"
-    width = (part["permanent_stick_right"] - part["permanent_stick_left"]).fillna(0.0).where(ok)
-    width.attrs.update(units="m", long_name="permanent stick zone size")
-    panels = [("permanent stick zone size [m]", width)]
-    panels.append(("regime", part["regime"].where(ok & (part["regime"] >= 0))))
-    for name in ("dissipation_per_cycle", "peak_slip_amplitude"):
-        values = part[name].where(ok)
-        if bool(values.notnull().any()):
-            panels.append((f"{SUMMARIES[name][1]} [{SUMMARIES[name][0]}]", values))
-
-    fig = Figure(figsize=(5.0 * min(len(panels), 2), 4.0 * math.ceil(len(panels) / 2)), layout="constrained")
-    FigureCanvasAgg(fig)
-    shown = dims[:2]
-    for k, (label, values) in enumerate(panels):
-        ax = fig.add_subplot(math.ceil(len(panels) / 2), min(len(panels), 2), k + 1)
-        if len(shown) == 2:
-            ydim, xdim = shown
-            x, y = _axis(part, xdim), _axis(part, ydim)
-            z = values.transpose(ydim, xdim).values.astype(float)
-            if label == "regime":
-                from matplotlib.colors import BoundaryNorm, ListedColormap
-
-                cmap = ListedColormap(["#bbbbbb", "#2c7bb6", "#fdae61", "#d7191c"])
-                mesh = ax.pcolormesh(x, y, z, cmap=cmap, norm=BoundaryNorm([-0.5, 0.5, 1.5, 2.5, 3.5], 4),
-                                     shading="nearest")
-                bar = fig.colorbar(mesh, ax=ax, ticks=[0, 1, 2, 3])
-                bar.ax.set_yticklabels(["separated", "full stick", "partial slip", "gross sliding"])
-            else:
-                mesh = ax.pcolormesh(x, y, z, shading="nearest")
-                fig.colorbar(mesh, ax=ax)
-            ax.set_xlabel(_axis_label(part, xdim))
-            ax.set_ylabel(_axis_label(part, ydim))
-        else:
-            xdim = shown[0]
-            ax.plot(_axis(part, xdim), values.values.astype(float), "o-")
-            ax.set_xlabel(_axis_label(part, xdim))
-            if label == "regime":
-                ax.set_yticks([0, 1, 2, 3], ["separated", "full stick", "partial slip", "gross sliding"])
-        ax.set_title(label, fontsize="medium")
-    title = ds.attrs.get("title", "halfslip sweep")
-    if held:
-        title += " (" + ", ".join(f"{d} = {_text(part[d].item())}" for d in held) + ")"
-    fig.suptitle(title, fontsize="medium")
+    fig = sweep_map(ds)
     if path is not None:
-        fig.savefig(path)
+        fig.savefig(path, dpi=DPI)
     return fig
-
-
-def _axis(ds: xr.Dataset, dim: str) -> np.ndarray:
-    values = ds[dim].values
-    return values if np.issubdtype(values.dtype, np.number) else np.arange(values.size)
-
-
-def _axis_label(ds: xr.Dataset, dim: str) -> str:
-    units = ds[dim].attrs.get("units")
-    return f"{dim} [{units}]" if units and units != "1" else dim
