@@ -609,3 +609,27 @@ def test_sigkill_with_checkpoints_leaves_a_valid_file_or_none(tmp_path):
         assert done.returncode == 0, done.stderr
         assert valid_or_absent(out) == "complete"
         assert no_temporaries(tmp_path)
+
+
+# -- halfslip plot on untrusted files --------------------------------------------------------
+
+def test_plot_never_writes_over_the_result(unfinished, tmp_path):
+    scene_file, source = unfinished
+    target = tmp_path / "run.h5"
+    target.write_bytes(source.read_bytes())
+    before = target.read_bytes()
+    for out in (target, tmp_path / "figure.h5"):
+        done = halfslip("plot", target, "-o", out)
+        assert_clean_refusal(done, out, "-o")
+    assert target.read_bytes() == before
+
+
+@pytest.mark.parametrize("route", ["oversized_variable", "external_link", "reference"])
+def test_plot_refuses_crafted_files(unfinished, tmp_path, route):
+    edit = _hdf5_routes(tmp_path)[route]
+    _, target = crafted(unfinished, tmp_path, edit)
+    done = halfslip("plot", target, "-o", tmp_path)
+    if route == "reference":  # a reference dataset in the checkpoint group
+        assert_clean_refusal(done, target, "neither numbers nor text")
+    else:
+        assert_clean_refusal(done, target, "not a halfslip result")

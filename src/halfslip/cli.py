@@ -12,7 +12,7 @@ from typing import Any
 import click
 
 from . import __version__
-from .errors import HalfslipInputError
+from .errors import HalfslipInputError, excerpt
 from .geometry import Hertz, ProfileSpanError, RoundedPunch, TabulatedProfile
 from .scene import Scene, load_scene, scene_error
 
@@ -326,6 +326,24 @@ def stop_now(out) -> None:
     os._exit(EXIT_INTERRUPTED)
 
 
+#: Figure formats ``halfslip plot -o`` writes (matplotlib's, by the file's ending).
+FIGURE_FORMATS = ("png", "pdf", "svg", "eps", "ps", "jpg", "jpeg", "tif", "tiff", "webp")
+
+
+def check_figure_output(target, source) -> None:
+    """Refuse, before drawing, a figure path that is not a figure format or is the result itself."""
+    from .io import _same_file
+
+    if target.is_dir() or str(target).endswith(("/", "\\")):
+        return
+    suffix = target.suffix.lower().lstrip(".")
+    if suffix not in FIGURE_FORMATS:
+        raise HalfslipInputError(f"a figure is written as {', '.join(FIGURE_FORMATS)} (by its ending); "
+                                 f"got {excerpt(target.name)}", file=str(target), field="-o")
+    if _same_file(target, source):
+        raise HalfslipInputError("is the result file itself; name a figure file", file=str(target), field="-o")
+
+
 def scene_inputs(scene: Scene) -> list:
     """The files a scene was read from: the scene file, its profile table and its load tables."""
     files = [scene.path, getattr(scene.profile, "source", None)]
@@ -512,14 +530,18 @@ def plot(result_file: str, output: str | None, kinds: tuple, at: tuple) -> None:
     from pathlib import Path
 
     from . import plot as plots
-    from .io import read_result
+    from .io import CheckpointError, read_result
     from .post import check_result, result_kind
 
     source = Path(result_file)
     if not source.is_file():
         raise HalfslipInputError("no such file" if not source.exists() else "is not a file", file=result_file)
+    if output:
+        check_figure_output(Path(output), source)
     try:
         ds = read_result(source)
+    except CheckpointError as error:  # a file that is not plain bounded data (io.check_result_file)
+        raise HalfslipInputError(f"not a halfslip result: {error}", file=result_file) from None
     except Exception as error:  # h5py / h5netcdf raise OSError, ValueError, KeyError ...
         raise HalfslipInputError(f"not a halfslip result (cannot read it: {type(error).__name__})",
                                  file=result_file) from None
