@@ -84,7 +84,13 @@ MAX_STRIP = 0.02
 FIT_TERMS = 128
 #: Lattice spacings from a stick edge within which slip-zone strains use the closed form.
 NEAR_SPACINGS = 4.7  # not 4: cluster point 6 sits at exactly 4 h, and the choice flipped with rounding
-#: A new stick edge within this many lattice spacings of an old singular point of its side replaces it.
+#: A new stick edge within this many lattice spacings of an old singular point of its side is that
+#: point: the edge moves onto it (far below the edge accuracy) and its exact stuck strain is kept. At
+#: a load extreme of a cycle the reversed slip zone ends, exactly, at the stick edge of the previous
+#: extreme; laid a rounding error eps beyond it, into the old slip zone, the new point took the
+#: strain of that zone at eps (E' eps), which the linear interpolation to the next point (~0.1 h away)
+#: spread over the stick zone, and the next extreme's edge moved by ~100 eps: a rounding error grew
+#: by 1e2 per half cycle until the points no longer snapped (tension cycled alone, Hertz).
 SNAP = 1e-6
 #: Points next to a stick edge whose strain changes by less than this fraction of max abs(E) are
 #: counted as stuck: they were locked at the slip limit with the same sign, and the equations
@@ -520,7 +526,7 @@ class GeneralSolver(TangentialSolver):
         """Coulomb excess and reversed slip, each relative to its tolerance (<= 1 passes)."""
         coulomb = self._coulomb(problem, shear)
         E_start, _ = data.start(sol)
-        _, dg, (b1, b2) = self._slip_update(problem, shear, data.X, E_start, data.spacing)
+        _, dg, (b1, b2) = self._slip_update(problem, shear, data.X, data.kind, E_start, data.spacing)
         reverse = 0.0
         for sign, zone in ((sol.config.left, data.X < b1), (sol.config.right, data.X > b2)):
             if sign != 0 and np.any(zone):
@@ -529,7 +535,8 @@ class GeneralSolver(TangentialSolver):
         direction = reverse / scale if scale > 0.0 else 0.0
         return max(max(coulomb, 0.0) / COULOMB_TOL, direction / DIRECTION_TOL)
 
-    def _slip_update(self, problem: StepProblem, shear: Shear, X: np.ndarray, E_start: np.ndarray, h: float):
+    def _slip_update(self, problem: StepProblem, shear: Shear, X: np.ndarray, kind: np.ndarray, E_start: np.ndarray,
+                     h: float):
         """Strain at the end of the step, slip increment, and the stick edges, at points X.
 
         Stuck points keep E_start; points in a slip zone take the current
@@ -537,7 +544,9 @@ class GeneralSolver(TangentialSolver):
         from the stick edge outward (trapezoid over X; the stick edge does not
         slip). Points next to the stick edge whose strain does not change
         (TRIM_TOL) count as stuck, and the edge moves out to the first point
-        that slips.
+        that slips. An edge within SNAP h of a singular point of its side moves
+        onto it first: that point is the old stick edge the new one meets, and
+        it keeps its exact stuck strain (see SNAP).
 
         Returns
         -------
@@ -550,9 +559,15 @@ class GeneralSolver(TangentialSolver):
         cfg = shear.config
         edges = [shear.stick_left, shear.stick_right]
         tol = TRIM_TOL * float(np.max(np.abs(E_start)))
-        for k, (side, sign) in enumerate(((-1, cfg.left), (1, cfg.right))):
+        for k, (side, sign, sing) in enumerate(((-1, cfg.left, SINGULAR_LEFT), (1, cfg.right, SINGULAR_RIGHT))):
             b = edges[k]
-            zone = (X < b) if side < 0 else (X > b)
+            if sign != 0:
+                met = np.flatnonzero((kind == sing) & (np.abs(X - b) <= SNAP * h))
+                if met.size:
+                    b = edges[k] = float(X[met[np.argmin(np.abs(X[met] - b))]])
+            # (no point between the solved edge and the one it snapped to is taken into the zone:
+            # the slip-zone strain is that of the stick interval solved for)
+            zone = (X < min(b, shear.stick_left)) if side < 0 else (X > max(b, shear.stick_right))
             if sign == 0 or not np.any(zone):
                 continue
             near = np.abs(X[zone] - b) <= NEAR_SPACINGS * h
@@ -580,7 +595,7 @@ class GeneralSolver(TangentialSolver):
         W = R1 - L1
         E_start, kappa = data.start(sol)
         X, kind, G0 = data.X, data.kind, data.G
-        _, _, (b1, b2) = self._slip_update(problem, shear, X, E_start, data.spacing)
+        _, _, (b1, b2) = self._slip_update(problem, shear, X, kind, E_start, data.spacing)
         left_zone = cfg.left != 0 and b1 - L1 > 1e-9 * W
         right_zone = cfg.right != 0 and R1 - b2 > 1e-9 * W
         regime = Regime.PARTIAL_SLIP if (left_zone or right_zone) else Regime.STICK
@@ -589,7 +604,7 @@ class GeneralSolver(TangentialSolver):
         if regime == Regime.PARTIAL_SLIP:
             X, kind, E_start, kappa, G0 = self._clusters(data, E_start, kappa, b1 if left_zone else None,
                                                              b2 if right_zone else None, N1)
-        E_end, dg, _ = self._slip_update(problem, shear, X, E_start, data.spacing)
+        E_end, dg, _ = self._slip_update(problem, shear, X, kind, E_start, data.spacing)
         snap = SNAP * data.spacing
         fresh = np.flatnonzero((kind >= SINGULAR_LEFT) & ((np.abs(X - b1) <= snap) | (np.abs(X - b2) <= snap)))
         if fresh.size:
