@@ -64,3 +64,62 @@ def test_a_failed_step_is_stored_counted_and_summarised(monkeypatch, tmp_path):
     assert ds.sizes["t"] == 3  # the initial state, the failed step (off the every-100 grid), the last step
     text = "\n".join(summarize(ds, tmp_path / "x.h5"))
     assert "NOT CONVERGED: 1 of 16 steps" in text and "7.5 x tolerance" in text
+
+
+def test_station_states_follow_cattaneo_mindlin():
+    """Hertz, constant P, Q raised to 0.6 fP then lowered to 0.2 fP (exact method): while Q rises the
+    points with b < |x| < a slip forward (q = +f p), b/a = sqrt(1 - Q/(fP)) (J1); after the reversal
+    the outer zones slip backward out to c = a(P - (Q_max - Q)/(2f)) (J2). Stations within two station
+    spacings of an edge are not asserted (the edge falls between stations)."""
+    scene = hs.parse_scene(textwrap.dedent("""
+        name: cm
+        material: {E: 200.0e9, nu: 0.3}
+        friction: 0.5
+        geometry: {kind: hertz, radius: 50.0e-3}
+        loads:
+          - ramp: {to: {P: 1.0e5}, duration: 1.0, steps: 2}
+          - ramp: {to: {Q: 3.0e4}, duration: 1.0, steps: 10}
+          - ramp: {to: {Q: 1.0e4}, duration: 1.0, steps: 10}
+        output: {fields: [q], points: 401}
+    """))
+    ds = hs.simulate(scene)
+    assert ds.attrs["method"] == "exact"
+    x = ds.x.values
+    h = 2 * (x[1] - x[0])
+    a = float(ds.contact_right.isel(t=-1))
+    states = ds["state"]
+    assert states.dtype == np.int8 and "forward_slip" in states.attrs["flag_meanings"]
+    loaded = ds.sel(t=2.0)
+    b = a * np.sqrt(1 - 3.0e4 / (0.5 * 1.0e5))
+    s = loaded["state"].values
+    assert np.all(s[np.abs(x) > a + h] == 0)
+    assert np.all(s[np.abs(x) < b - h] == 1)
+    assert np.all(s[(np.abs(x) > b + h) & (np.abs(x) < a - h)] == 2)
+    unloaded = ds.isel(t=-1)["state"].values
+    c = a * np.sqrt(1 - (3.0e4 - 1.0e4) / (2 * 0.5 * 1.0e5))
+    assert np.all(unloaded[(np.abs(x) > c + h) & (np.abs(x) < a - h)] == 3)
+    assert np.all(unloaded[np.abs(x) < c - h] == 1)
+    assert np.all(ds["stick_intervals"].values[1:] == 1) and ds["stick_intervals"].values[0] == 0
+
+
+def test_station_states_show_opposite_slip_under_tension():
+    """General solver, Hertz, constant P and a large bulk tension alone: the slip zones at the two
+    edges slip in opposite directions (physics.md, slip of opposite sign at the two ends)."""
+    scene = hs.parse_scene(textwrap.dedent("""
+        name: tension
+        material: {E: 200.0e9, nu: 0.3}
+        friction: 0.6
+        geometry: {kind: hertz, radius: 50.0e-3}
+        loads:
+          - ramp: {to: {P: 1.0e5}, duration: 1.0, steps: 2}
+          - ramp: {to: {sigma: 1.0e8}, duration: 1.0, steps: 8}
+        solver: {nodes: 64}
+        output: {fields: [q], points: 201}
+    """))
+    ds = hs.simulate(scene)
+    last = ds.isel(t=-1)
+    s, x = last["state"].values, ds.x.values
+    left = s[x < float(last.stick_left)]
+    right = s[x > float(last.stick_right)]
+    assert {2, 3} <= set(np.unique(left[left > 0])) | set(np.unique(right[right > 0]))
+    assert set(np.unique(left[left > 0])) != set(np.unique(right[right > 0]))

@@ -17,6 +17,7 @@ import xarray as xr
 
 from .geometry import NormalProblem
 from .scene import check_run_bytes
+from .solvers.base import STATION_STATES
 from .state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime
 
 METHODS = ("auto", "exact", "general")
@@ -127,7 +128,7 @@ def slip_zone_spacings(ds: xr.Dataset, nodes: int) -> float:
 
 def _dtype(name: str):
     """Storage type of a per-step column: the regime code and the converged flag are int8, the rest float."""
-    return np.int8 if name in ("regime", "converged") else float
+    return np.int8 if name in ("regime", "converged", "stick_intervals") else float
 
 
 class _Records:
@@ -138,7 +139,8 @@ class _Records:
     """
 
     names = ("t", "P", "Q", "M", "sigma", "contact_left", "contact_right",
-             "stick_left", "stick_right", "regime", "shift", "dissipation", "converged", "residual")
+             "stick_left", "stick_right", "regime", "shift", "dissipation", "converged", "residual",
+             "stick_intervals")
 
     def __init__(self):
         self.chunks = {k: [] for k in self.names}
@@ -151,7 +153,8 @@ class _Records:
                 self.chunks[k].append(np.asarray(self.buffer[k], _dtype(k)))
                 self.buffer[k] = []
 
-    def add(self, state: ContactState, regime: Regime, converged: bool = True, residual: float = 0.0):
+    def add(self, state: ContactState, regime: Regime, converged: bool = True, residual: float = 0.0,
+            stick_intervals: int = 1):
         c = self.buffer
         c["t"].append(state.t)
         for k, v in zip(("P", "Q", "M", "sigma"), state.loads):
@@ -165,12 +168,14 @@ class _Records:
         c["dissipation"].append(state.dissipation)
         c["converged"].append(int(converged))
         c["residual"].append(residual)
+        c["stick_intervals"].append(stick_intervals)
 
     def add_steps(self, steps: dict, mask: np.ndarray):
         """Append the masked entries of per-step arrays (keys as ``names``)."""
         self._flush()
         n = len(mask)
-        defaults = {"converged": np.ones(n, np.int8), "residual": np.zeros(n)}  # an exact marcher: always met
+        defaults = {"converged": np.ones(n, np.int8), "residual": np.zeros(n),  # an exact marcher: always met
+                    "stick_intervals": np.isfinite(np.asarray(steps["stick_left"], float)).astype(np.int8)}
         for k in self.names:
             self.chunks[k].append(np.asarray(steps.get(k, defaults.get(k)), _dtype(k))[mask])
 
@@ -188,8 +193,8 @@ class _Records:
         for k in self.names:
             self.chunks[k] = [np.asarray(ds[k].values, _dtype(k))]
             self.buffer[k] = []
-        for k in fields:
-            self.fields[k] = list(np.asarray(ds[k].values, float))
+        for k in (*fields, "state") if fields else ():
+            self.fields[k] = list(np.asarray(ds[k].values, np.int8 if k == "state" else float))
 
 
 def simulate(
@@ -335,7 +340,7 @@ class _Run:
         self._store(Regime.SEPARATED)
 
     def _store(self, regime: Regime, converged: bool = True, residual: float = 0.0) -> None:
-        self.rec.add(self.state, regime, converged, residual)
+        self.rec.add(self.state, regime, converged, residual, self.solver.stick_intervals(self.state))
         if self.save.fields:
             self.rec.add_fields(_fields(self.solver, self.state, self.save))
 
@@ -597,12 +602,12 @@ class CycleSkipper:
 def _fields(solver, state: ContactState, save: SaveAt) -> dict:
     out = {}
     mem = state.memory
-    if "p" in save.fields or "q" in save.fields:
-        p, q = solver.tractions(mem, save.x)
-        if "p" in save.fields:
-            out["p"] = p
-        if "q" in save.fields:
-            out["q"] = q
+    p, q = solver.tractions(mem, save.x)
+    out["state"] = solver.station_states(state, save.x, q)  # whenever fields are stored
+    if "p" in save.fields:
+        out["p"] = p
+    if "q" in save.fields:
+        out["q"] = q
     if "slip" in save.fields:
         out["slip"] = solver.slip(mem)
     return out
@@ -627,6 +632,8 @@ _META = {
     "slip": ("m", "accumulated slip since the point entered contact"),
     "converged": ("1", "whether the step met the method's own tolerance (1) or not (0)"),
     "residual": ("1", "violation of the step's checks relative to their tolerance (<= 1 when converged)"),
+    "stick_intervals": ("1", "number of stick intervals (0 when nothing sticks)"),
+    "state": ("1", "what the surface point did in the step"),
 }
 
 
@@ -639,7 +646,7 @@ def _dataset(rec: _Records, save: SaveAt) -> xr.Dataset:
     if save.fields:
         coords["x"] = save.x
         for k, rows in rec.fields.items():
-            data[k] = (("t", "x"), np.asarray(rows, float))
+            data[k] = (("t", "x"), np.asarray(rows, np.int8 if k == "state" else float))
     ds = xr.Dataset(data, coords=coords)
     for k in ds.variables:
         units, long_name = _META[k]
@@ -647,4 +654,6 @@ def _dataset(rec: _Records, save: SaveAt) -> xr.Dataset:
     ds["regime"].attrs.update(
         flag_values=np.arange(4, dtype=np.int8), flag_meanings=Regime.flag_meanings()
     )
+    if "state" in ds:
+        ds["state"].attrs.update(flag_values=np.arange(4, dtype=np.int8), flag_meanings=STATION_STATES)
     return ds

@@ -68,6 +68,42 @@ class TangentialSolver(abc.ABC):
     #: None, or ``cycle_tolerance(state) -> float`` [m]: see the module notes.
     cycle_tolerance = None
 
+    def stick_intervals(self, state: ContactState) -> int:
+        """Number of stick intervals of the state (a method that represents one interval: 0 or 1)."""
+        return 0 if np.isnan(state.stick_left) else 1
+
+    def station_states(self, state: ContactState, x: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """What each surface station did in the step that ended in ``state`` (STATION_STATES codes).
+
+        Outside the contact: out of contact; inside the stick zone: stick;
+        elsewhere in the contact the point slipped in the step, in the
+        direction of q (friction opposes the slip of the substrate, so q has
+        the sign of the pad's slip, physics.md). A station in a slip zone
+        where q is zero (at a contact edge) takes the direction of its nearest
+        slipping neighbour.
+        """
+        codes = np.zeros(x.shape, np.int8)
+        if np.isnan(state.contact_left):
+            return codes
+        inside = (x >= state.contact_left) & (x <= state.contact_right)
+        stuck = inside & (x >= state.stick_left) & (x <= state.stick_right)
+        slipping = inside & ~stuck
+        direction = np.sign(q)
+        known = slipping & (direction != 0)
+        if np.any(slipping & ~known) and np.any(known):
+            idx = np.flatnonzero(known)
+            fill = idx[np.abs(np.arange(x.size)[:, None] - idx[None, :]).argmin(axis=1)]
+            direction = np.where(known, direction, direction[fill])
+        codes[stuck] = STICK
+        codes[slipping & (direction >= 0)] = FORWARD_SLIP
+        codes[slipping & (direction < 0)] = BACKWARD_SLIP
+        return codes
+
+
+#: Codes of the per-station ``state`` field.
+OUT_OF_CONTACT, STICK, FORWARD_SLIP, BACKWARD_SLIP = 0, 1, 2, 3
+STATION_STATES = "out_of_contact stick forward_slip backward_slip"
+
 
 def _identical(a, b) -> bool:
     """Field-by-field identity of two memories (arrays compared exactly)."""
