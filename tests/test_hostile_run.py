@@ -56,6 +56,28 @@ SHORT_SCENE = SCENE.replace("count: 40", "count: 2").replace("steps_per_cycle: 4
 
 def _limits():
     resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT, MEMORY_LIMIT))
+    as_from_a_terminal()
+
+
+def as_from_a_terminal():
+    """In the child: Ctrl-C delivered as at a terminal (a background job inherits SIGINT ignored)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+def start(*args):
+    """Start a halfslip command as a terminal user would (console script, SIGINT not ignored)."""
+    return subprocess.Popen([*console_script(), *map(str, args)], stderr=subprocess.PIPE, text=True,
+                            preexec_fn=as_from_a_terminal)
+
+
+def finish(proc):
+    """stderr of ``proc`` once it ends; killed (and the test failed) if it outlives the time limit."""
+    try:
+        return proc.communicate(timeout=TIME_LIMIT)[1]
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.communicate()
+        raise
 
 
 def halfslip(*args, cwd=None):
@@ -461,8 +483,7 @@ def test_two_runs_on_one_output_the_second_is_refused(tmp_path):
     scene = tmp_path / "scene.yaml"
     scene.write_text(SCENE)
     out = tmp_path / "shared.h5"
-    first = subprocess.Popen([sys.executable, "-m", "halfslip", "run", str(scene), "-o", str(out), "--quiet"],
-                             stderr=subprocess.PIPE, text=True)
+    first = start("run", scene, "-o", out, "--quiet")
     try:
         deadline = time.time() + 60
         while not out.exists() and time.time() < deadline:
@@ -553,11 +574,10 @@ def test_ctrl_c_during_start_up(tmp_path, delay, interpreter_start_up):
     scene.write_text(SCENE)
     out = tmp_path / "out.h5"
     for retry in range(3):
-        proc = subprocess.Popen([*console_script(), "run", str(scene), "-o", str(out), "--quiet"],
-                                stderr=subprocess.PIPE, text=True)
+        proc = start("run", scene, "-o", out, "--quiet")
         time.sleep(interpreter_start_up + delay + 0.2 * retry)
         proc.send_signal(signal.SIGINT)
-        err = proc.communicate(timeout=TIME_LIMIT)[1]
+        err = finish(proc)
         if "Fatal Python error" not in err:  # it landed in the interpreter's own start-up
             break
     assert proc.returncode == 130, err
@@ -571,8 +591,7 @@ def test_double_ctrl_c(tmp_path, gap):
     scene = tmp_path / "scene.yaml"
     scene.write_text(SCENE)
     out = tmp_path / "out.h5"
-    proc = subprocess.Popen([*console_script(), "run", str(scene), "-o", str(out), "--quiet",
-                             "--checkpoint-every", "0.1"], stderr=subprocess.PIPE, text=True)
+    proc = start("run", scene, "-o", out, "--quiet", "--checkpoint-every", "0.1")
     deadline = time.time() + 60
     while not out.exists() and time.time() < deadline:
         time.sleep(0.02)
@@ -580,7 +599,7 @@ def test_double_ctrl_c(tmp_path, gap):
     time.sleep(gap)
     if proc.poll() is None:
         proc.send_signal(signal.SIGINT)
-    err = proc.communicate(timeout=TIME_LIMIT)[1]
+    err = finish(proc)
     assert proc.returncode == 130, err
     assert "Traceback" not in err and "Exception" not in err and len(err.splitlines()) <= 2, err
     assert valid_or_absent(out) == "incomplete"
@@ -598,8 +617,7 @@ def test_sigkill_with_checkpoints_leaves_a_valid_file_or_none(tmp_path):
     rng = random.Random(13)
     for attempt in range(3):
         out = tmp_path / f"killed{attempt}.h5"
-        proc = subprocess.Popen([*console_script(), "run", str(scene), "-o", str(out), "--quiet",
-                                 "--checkpoint-every", "0.1"], stderr=subprocess.PIPE, text=True)
+        proc = start("run", scene, "-o", out, "--quiet", "--checkpoint-every", "0.1")
         time.sleep(rng.uniform(0.8, 2.0))
         proc.kill()
         proc.wait(timeout=60)

@@ -37,9 +37,14 @@ def run_cli(*args, **kwargs):
     return subprocess.run([sys.executable, "-m", "halfslip.cli", *args], capture_output=True, text=True, **kwargs)
 
 
+def as_from_a_terminal():
+    """In the child: Ctrl-C delivered as at a terminal (a background job inherits SIGINT ignored)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def start_cli(*args):
     return subprocess.Popen([sys.executable, "-m", "halfslip.cli", *args], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True, preexec_fn=as_from_a_terminal)
 
 
 SKIPPED_ATTRIBUTES = {

@@ -284,7 +284,9 @@ def run(scene_file: str, output: str | None, method: str | None, nodes: int | No
 
     with OutputLock(out):
         previous_run = read_unfinished_run(out, scene) if resume else None
-        handlers = {sig: signal.signal(sig, _request_stop) for sig in (signal.SIGINT, signal.SIGTERM)}
+        # SIGINT ignored by whoever started us (a background job of a script) stays ignored
+        handlers = {sig: signal.signal(sig, _request_stop) for sig in (signal.SIGINT, signal.SIGTERM)
+                    if signal.getsignal(sig) is not signal.SIG_IGN}
         progress = _Progress(enabled=not quiet and sys.stderr.isatty())
         try:
             result = simulate(scene, method=method, nodes=nodes, progress=progress,
