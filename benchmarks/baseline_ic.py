@@ -1,0 +1,557 @@
+"""An independent influence-coefficient (IC) slip solver: the reference baseline of issue 14.
+
+Independent of ``halfslip.solvers``: it uses only ``NormalProblem`` (contact
+edges and the pressure at element centres) and the formulation of
+docs/physics.md.
+
+Discretisation
+--------------
+N equal elements of width h on a fixed grid [x_lo, x_hi] spanning every
+contact of the history (plus a margin); piecewise-constant shear q_j,
+collocation at the centres x_i. The relative tangential displacement (T1
+integrated) is
+
+    g_i = delta + sum_j C_ij q_j + A sigma x_i / 4,
+    C_ij = (A/pi) int_{elem j} ln(|x_i - xi| / l) dxi      (closed form),
+
+with the internal datum l = the grid length (then -C is positive definite:
+the logarithmic capacity of the grid, L/4, is below l). The reported rigid
+shift is converted to the datum ``shift_datum`` (default: the profile's
+length scale, as the package): delta_l' = delta_l + (A/pi) ln(l'/l) Q.
+
+Per element the state is a sign s in {-1, 0, +1} (0 = stick) and the locked
+relative displacement g_lock (NaN = out of contact, no memory). A step (or
+sub-step) to loads L solves
+
+    stick (s = 0):  g_i(q, delta) = g_lock_i          (slip increment zero)
+    slip  (s = +-1): q_i = s f p_i,  s (g_i - g_lock_i) >= 0
+    Coulomb:        |q_i| <= f p_i,  equilibrium  h sum q_j = Q
+
+by a primal-dual active set (semismooth Newton) iteration warm-started from
+the previous (sub)step's signs: s_i <- sign(z_i) if |z_i| > f p_i else 0 with
+z = q + c (g - g_lock), c = 2 / (pi A h) (the local stiffness of one
+element). It stops when the signs repeat; a repeated earlier pattern or
+MAX_ITER iterations is reported as not converged. Slipping elements then
+take g_lock = g (their new position).
+
+Linear algebra (the "cached factorisation")
+--------------------------------------------
+C is symmetric Toeplitz on the uniform grid, so the matrix of any contiguous
+run of n stick elements is the *leading* n x n block T_n of T = -C, whose
+Cholesky factor is the leading block of the Cholesky factor of T. One
+Cholesky of T per grid (computed once) therefore serves every single-run
+stick set: two triangular sweeps over the leading block (numba, O(n^2)), no
+refactorisation when the set changes. The vector T_n^{-1} 1 depends on n only
+and is cached. Stick sets of several runs (split stick zones) are solved by
+conjugate gradients preconditioned with the exact per-run solves (block
+Jacobi), products with T by FFT (circulant embedding). ``strategy='dense'``
+(factorise each stick set with LAPACK, cache the factor per set) and
+``strategy='lu'`` (the old straw man: LU from scratch every solve) are kept
+for the measurement in docs/baseline_ic.md.
+
+Contact arrival (physics.md, first trap)
+----------------------------------------
+The contact edges along the straight step are interpolated by a cubic spline
+through normal solves at NODES points (graded like s^2 when the step starts
+from P = 0, where the edges grow like sqrt(P)); the fraction at which each
+element centre enters contact is the root of the spline. The step is split at
+every arrival: each sub-step is solved at its exact loads (a true normal
+solve), and the arriving elements then lock the g they have at that instant.
+Elements leaving contact forget their memory.
+
+Stick edges
+-----------
+``stick_left/right``: inside the outermost stick element next to a slip zone
+the Coulomb margin m = 1 - s q/(f p) vanishes like sqrt(distance to the edge),
+so m^2 is extrapolated linearly from the two outermost stick elements to
+zero, the result clipped to [centre of the stick element, centre of the
+slipping neighbour]. Where the stick zone reaches the contact edge the stick
+edge is the contact edge. ``stick_left_cell/right_cell`` give the element
+boundaries instead.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numba
+import numpy as np
+import scipy.fft as sfft
+from scipy.interpolate import CubicSpline
+from scipy.linalg import cho_factor, cho_solve, cholesky, lu_factor, lu_solve
+
+from halfslip.geometry import NormalProblem
+
+#: Active-set iterations per (sub)step before giving up.
+MAX_ITER = 60
+#: Normal solves along a step for the edge spline.
+NODES = 33
+#: Coulomb tolerance of the active-set update, relative to f max p.
+COULOMB_TOL = 1e-10
+#: PCG relative tolerance (multi-run stick sets).
+CG_TOL = 1e-13
+
+
+# -- triangular sweeps over the leading block of a cached Cholesky factor ------
+@numba.njit(cache=True)
+def _leading_cho_solve(L, b):
+    """Solve (L_n L_n^T) x = b with L_n the leading n x n block of the lower factor L (F-ordered)."""
+    n = b.shape[0]
+    y = b.copy()
+    for j in range(n):  # forward: L y = b, column oriented (columns contiguous)
+        y[j] /= L[j, j]
+        yj = y[j]
+        for i in range(j + 1, n):
+            y[i] -= L[i, j] * yj
+    for j in range(n - 1, -1, -1):  # backward: L^T x = y, dot with column j
+        s = y[j]
+        for i in range(j + 1, n):
+            s -= L[i, j] * y[i]
+        y[j] = s / L[j, j]
+    return y
+
+
+def _prim(u, datum):
+    """int ln(|u|/l) du = u ln(|u|/l) - u (0 at u = 0)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(u == 0.0, 0.0, u * np.log(np.abs(u) / datum) - u)
+
+
+@dataclass
+class StepReport:
+    converged: bool = True
+    iterations: int = 0
+    substeps: int = 0
+    solves: int = 0
+    cg_iterations: int = 0
+    time: float = 0.0
+    gross: bool = False
+    messages: list = field(default_factory=list)
+
+
+class ICBaseline:
+    """Influence-coefficient marching solver (see module docstring).
+
+    Parameters
+    ----------
+    problem : NormalProblem
+    friction : float
+    n : int
+        Number of elements over ``extent``.
+    extent : (float, float)
+        Grid [x_lo, x_hi] covering every contact of the history [m].
+    strategy : {'toeplitz', 'dense', 'lu'}
+        Linear algebra of the stick-set solves (module docstring).
+    shift_datum : float, optional
+        Datum length of the reported rigid shift (default: profile length scale).
+    """
+
+    def __init__(self, problem: NormalProblem, friction: float, n: int, extent, strategy="toeplitz",
+                 shift_datum=None):
+        self.problem = problem
+        self.f = float(friction)
+        self.A = problem.compliance
+        lo, hi = map(float, extent)
+        self.n = int(n)
+        self.edges = np.linspace(lo, hi, self.n + 1)
+        self.x = 0.5 * (self.edges[:-1] + self.edges[1:])
+        self.h = (hi - lo) / self.n
+        self.datum = hi - lo
+        self.shift_datum = float(shift_datum if shift_datum is not None else problem.profile.length_scale)
+        self.strategy = strategy
+        k = np.arange(self.n) * self.h
+        self.t = self.A / math.pi * (_prim(k + 0.5 * self.h, self.datum) - _prim(k - 0.5 * self.h, self.datum))
+        # circulant embedding of C for FFT products
+        col = np.concatenate([self.t, [0.0], self.t[:0:-1]])
+        self._m = col.size
+        self._fft = sfft.rfft(col)
+        self._chol = None
+        self._ones_cache: dict[int, np.ndarray] = {}
+        self._dense_cache: dict = {}
+        self.c_pdas = 2.0 / (math.pi * self.A * self.h)
+        # state
+        self.P = self.Q = self.M = self.sigma = 0.0
+        self.g_lock = np.full(self.n, np.nan)
+        self.sign = np.zeros(self.n)
+        self.q = np.zeros(self.n)
+        self.p = np.zeros(self.n)
+        self.delta = 0.0
+        self.dissipation = 0.0
+        self.contact = (0.0, 0.0)
+        self.counters = dict(solves=0, cg=0, normal=0)
+
+    # -- linear algebra ----------------------------------------------------------
+    def matvec(self, q):
+        """C @ q on the whole grid (FFT)."""
+        return sfft.irfft(self._fft * sfft.rfft(q, self._m), self._m)[: self.n]
+
+    def _cholesky(self):
+        if self._chol is None:
+            i = np.arange(self.n)
+            T = -self.t[np.abs(i[:, None] - i[None, :])]
+            self._chol = np.asfortranarray(cholesky(T, lower=True, overwrite_a=True, check_finite=False))
+        return self._chol
+
+    def _run_solve(self, n, b):
+        """T_n^{-1} b for a contiguous run of n elements (leading block of the cached factor)."""
+        return _leading_cho_solve(self._cholesky(), b)
+
+    def _run_ones(self, n):
+        u = self._ones_cache.get(n)
+        if u is None:
+            u = self._run_solve(n, np.ones(n))
+            self._ones_cache[n] = u
+        return u
+
+    def _solve_stick(self, stick, rhs, report):
+        """Solve -C_SS q = rhs_S (two right-hand sides packed as columns: rhs shape (ns, k))."""
+        self.counters["solves"] += 1
+        report.solves += 1
+        if self.strategy == "lu":
+            T = -self.t[np.abs(stick[:, None] - stick[None, :])]
+            return lu_solve(lu_factor(T, check_finite=False), rhs, check_finite=False)
+        if self.strategy == "dense":
+            key = (stick[0], stick.size, hash(stick.tobytes()))
+            fac = self._dense_cache.get(key)
+            if fac is None:
+                T = -self.t[np.abs(stick[:, None] - stick[None, :])]
+                fac = cho_factor(T, lower=True, check_finite=False)
+                if len(self._dense_cache) > 8:
+                    self._dense_cache.pop(next(iter(self._dense_cache)))
+                self._dense_cache[key] = fac
+            return cho_solve(fac, rhs, check_finite=False)
+        # toeplitz: runs
+        breaks = np.flatnonzero(np.diff(stick) > 1) + 1
+        starts = np.concatenate([[0], breaks])
+        stops = np.concatenate([breaks, [stick.size]])
+        out = np.empty_like(rhs)
+        if starts.size == 1:
+            n = stick.size
+            out[:, 0] = self._run_ones(n)
+            for k in range(1, rhs.shape[1]):
+                out[:, k] = self._run_solve(n, np.ascontiguousarray(rhs[:, k]))
+            return out
+
+        def prec(r):
+            z = np.empty_like(r)
+            for a, b in zip(starts, stops):
+                z[a:b] = self._run_solve(b - a, np.ascontiguousarray(r[a:b]))
+            return z
+
+        def op(v):
+            full = np.zeros(self.n)
+            full[stick] = v
+            return -self.matvec(full)[stick]
+
+        for k in range(rhs.shape[1]):
+            b = rhs[:, k]
+            x = prec(b)
+            r = b - op(x)
+            z = prec(r)
+            d = z.copy()
+            rz = r @ z
+            bn = math.sqrt(b @ b)
+            it = 0
+            while math.sqrt(r @ r) > CG_TOL * bn and it < 200:
+                Ad = op(d)
+                alpha = rz / (d @ Ad)
+                x += alpha * d
+                r -= alpha * Ad
+                z = prec(r)
+                rz_new = r @ z
+                d = z + (rz_new / rz) * d
+                rz = rz_new
+                it += 1
+            report.cg_iterations += it
+            self.counters["cg"] += it
+            out[:, k] = x
+        return out
+
+    # -- normal problem ------------------------------------------------------------
+    def _normal(self, P, M):
+        self.counters["normal"] += 1
+        if P <= 0.0:
+            return None
+        return self.problem.solve(P, M)
+
+    def _edges_along(self, l0, l1):
+        """Cubic splines left(lam), right(lam) along the straight step, and the parameter map."""
+        graded = l0[0] <= 0.0
+        s = np.linspace(0.0, 1.0, NODES)
+        lam = s**2 if graded else s
+        left, right = np.empty(NODES), np.empty(NODES)
+        for k, la in enumerate(lam):
+            P = l0[0] + la * (l1[0] - l0[0])
+            M = l0[2] + la * (l1[2] - l0[2])
+            sol = self._normal(P, M)
+            left[k], right[k] = (sol.left, sol.right) if sol is not None else (0.0, 0.0)
+        if graded:  # the contact forms at lam = 0+: take the limit from the first interior node
+            left[0], right[0] = left[1], right[1]
+        return s, CubicSpline(s, left), CubicSpline(s, right), graded
+
+    def _arrivals(self, l0, l1):
+        """[(lam, element indices)] of elements entering contact during the step, sorted."""
+        s, sl, sr, graded = self._edges_along(l0, l1)
+        fine = np.linspace(0.0, 1.0, 1025)
+        L, R = sl(fine), sr(fine)
+        lo, hi = L.min(), R.max()
+        cand = np.flatnonzero((self.x > lo) & (self.x < hi))
+        if cand.size == 0:
+            return []
+        xs = self.x[cand][:, None]
+        phi = np.minimum(xs - L[None, :], R[None, :] - xs)  # > 0 inside
+        inside = phi > 0.0
+        end_in = inside[:, -1]
+        # last crossing outside -> inside
+        out_cols = np.where(~inside, np.arange(fine.size)[None, :], -1).max(axis=1)
+        has_mem = ~np.isnan(self.g_lock[cand])
+        events = {}
+        for row in np.flatnonzero(end_in):
+            k = out_cols[row]
+            if k < 0:
+                continue  # inside throughout (from the start of the step)
+            i = cand[row]
+            if k == 0 and graded and not has_mem[row] and self.P <= 0.0:
+                lam_s = 0.0
+            else:
+                # refine the root of phi on the spline in [fine[k], fine[k+1]] by bisection
+                a, b = fine[k], fine[k + 1]
+                xi = self.x[i]
+                for _ in range(40):
+                    m = 0.5 * (a + b)
+                    if min(xi - float(sl(m)), float(sr(m)) - xi) > 0.0:
+                        b = m
+                    else:
+                        a = m
+                lam_s = b
+            lam = lam_s**2 if graded else lam_s
+            events.setdefault(round(lam, 13), []).append(i)
+        return sorted((lam, np.array(idx)) for lam, idx in events.items())
+
+    # -- marching ------------------------------------------------------------------
+    def step(self, P, Q, M, sigma):
+        """March along the straight line from the current loads to (P, Q, M, sigma)."""
+        started = time.perf_counter()
+        report = StepReport()
+        l0 = (self.P, self.Q, self.M, self.sigma)
+        l1 = (float(P), float(Q), float(M), float(sigma))
+        events = self._arrivals(l0, l1) if l1[0] > 0.0 else []
+        for lam, idx in events + [(1.0, np.zeros(0, dtype=int))]:
+            loads = tuple(a + lam * (b - a) for a, b in zip(l0, l1))
+            self._substep(loads, idx, report, final=(lam == 1.0))
+        self.P, self.Q, self.M, self.sigma = l1
+        report.time = time.perf_counter() - started
+        return report
+
+    def _substep(self, loads, arriving, report, final):
+        P, Q, M, sigma = loads
+        report.substeps += 1
+        f, A, h = self.f, self.A, self.h
+        sol = self._normal(P, M)
+        p_old = self.p
+        if sol is None:
+            self.g_lock[:] = np.nan
+            self.q[:] = 0.0
+            self.sign[:] = 0.0
+            self.p = np.zeros(self.n)
+            self.contact = (0.0, 0.0)
+            return
+        self.contact = (sol.left, sol.right)
+        inside = (self.x > sol.left) & (self.x < sol.right)
+        p = np.where(inside, sol.pressure(self.x), 0.0)
+        self.g_lock[~inside] = np.nan
+        self.sign[~inside] = 0.0
+        self.q[~inside] = 0.0
+        active = inside & ~np.isnan(self.g_lock)
+        self._solve(active, p, Q, sigma, p_old, report)
+        new = inside & np.isnan(self.g_lock)
+        new[arriving] = True
+        if np.any(new):
+            g = self._g(sigma)
+            self.g_lock[new] = g[new]
+            self.sign[new] = 0.0
+            if final and np.any(new & inside):  # arrivals at lam = 1 (or missed): carry them in the final state
+                self._solve(inside & ~np.isnan(self.g_lock), p, Q, sigma, p, report)
+        self.p = p
+
+    def _g(self, sigma):
+        return self.delta + self.matvec(self.q) + 0.25 * self.A * sigma * self.x
+
+    def _solve(self, active, p, Q, sigma, p_old, report):
+        f, A, h = self.f, self.A, self.h
+        idx = np.flatnonzero(active)
+        if idx.size == 0:
+            self.q[:] = 0.0
+            return
+        pm = f * p[idx].max()
+        g_lock = self.g_lock[idx]
+        if abs(Q) >= f * h * p[idx].sum():  # gross sliding on the discrete contact
+            report.gross = True
+            s = math.copysign(1.0, Q)
+            q = np.zeros(self.n)
+            q[idx] = s * f * p[idx]
+            # the shift: the middle element keeps its position (datum of a gross slide)
+            g0 = self.matvec(q) + 0.25 * A * sigma * self.x
+            mid = idx[idx.size // 2]
+            self.delta = self.g_lock[mid] - g0[mid]
+            self._finish(idx, q, s * np.ones(idx.size), p, p_old, sigma)
+            return
+        sign = self.sign[idx].copy()
+        seen = set()
+        converged = False
+        xs = 0.25 * A * sigma * self.x
+        for it in range(1, MAX_ITER + 1):
+            report.iterations += 1
+            st = sign == 0.0
+            if not st.any():  # keep equilibrium solvable: the element of largest pressure sticks
+                j = int(np.argmax(p[idx]))
+                st[j] = True
+                sign[j] = 0.0
+            q = np.zeros(self.n)
+            q[idx[~st]] = sign[~st] * f * p[idx[~st]]
+            stick = idx[st]
+            r = g_lock[st] - xs[stick] - self.matvec(q)[stick]
+            sol = self._solve_stick(stick, np.column_stack([np.ones(stick.size), -r]), report)
+            u, w = sol[:, 0], sol[:, 1]
+            # q_S = delta u + w  (from -C q = delta 1 - r), equilibrium fixes delta
+            Qs = Q / h - q[idx[~st]].sum()
+            delta = (Qs - w.sum()) / u.sum()
+            q[stick] = delta * u + w
+            g = delta + self.matvec(q) + xs
+            dg = g[idx] - g_lock
+            z = q[idx] + self.c_pdas * dg
+            new = np.where(np.abs(z) > f * p[idx] + COULOMB_TOL * pm, np.sign(z), 0.0)
+            if np.array_equal(new, sign):
+                converged = True
+                break
+            key = new.tobytes()
+            if key in seen:
+                report.messages.append(f"active set cycles after {it} iterations")
+                break
+            seen.add(key)
+            sign = new
+        if not converged:
+            report.converged = False
+            if not report.messages:
+                report.messages.append(f"no convergence in {MAX_ITER} iterations")
+        self.delta = delta
+        self._finish(idx, q, sign, p, p_old, sigma)
+
+    def _finish(self, idx, q, sign, p, p_old, sigma):
+        g = self._g_from(q, sigma)
+        slip = idx[sign != 0.0]
+        dg = g[slip] - self.g_lock[slip]
+        self.dissipation += self.f * self.h * float(np.sum(0.5 * (p[slip] + p_old[slip]) * np.abs(dg)))
+        self.g_lock[slip] = g[slip]
+        self.q = q
+        self.sign[:] = 0.0
+        self.sign[idx] = sign
+
+    def _g_from(self, q, sigma):
+        return self.delta + self.matvec(q) + 0.25 * self.A * sigma * self.x
+
+    # -- outputs -------------------------------------------------------------------
+    @property
+    def shift(self):
+        """Rigid shift with the datum ``shift_datum`` (module docstring)."""
+        return self.delta + self.A / math.pi * math.log(self.shift_datum / self.datum) * self.h * self.q.sum()
+
+    def zones(self):
+        """Stick intervals [(left, right)] (interpolated edges) and the outermost edges, both forms."""
+        inside = ~np.isnan(self.g_lock) & (self.p > 0.0)
+        idx = np.flatnonzero(inside)
+        nan = (math.nan, math.nan)
+        if idx.size == 0:
+            return dict(count=0, stick=nan, cell=nan)
+        st = idx[self.sign[idx] == 0.0]
+        if st.size == 0:
+            return dict(count=0, stick=nan, cell=nan)
+        breaks = np.flatnonzero(np.diff(st) > 1) + 1
+        count = breaks.size + 1
+        i0, i1 = st[0], st[-1]
+        left = self._edge(i0, -1, idx)
+        right = self._edge(i1, +1, idx)
+        cell = (self.edges[i0] if i0 != idx[0] else self.contact[0],
+                self.edges[i1 + 1] if i1 != idx[-1] else self.contact[1])
+        return dict(count=count, stick=(left, right), cell=cell)
+
+    def _edge(self, i, outward, idx):
+        if (outward < 0 and i == idx[0]) or (outward > 0 and i == idx[-1]):
+            return self.contact[0] if outward < 0 else self.contact[1]
+        j = i + outward
+        s = self.sign[j]
+        fp = self.f * self.p
+        m1 = max(1.0 - s * self.q[i] / fp[i], 0.0)
+        k = i - outward
+        x1, xj = self.x[i], self.x[j]
+        if self.sign[k] != 0.0 or not self.p[k] > 0.0:
+            return 0.5 * (x1 + xj)
+        m2 = max(1.0 - s * self.q[k] / fp[k], 0.0)
+        if m2 <= m1:
+            return 0.5 * (x1 + xj)
+        b = x1 + m1 * m1 * (x1 - self.x[k]) / (m2 * m2 - m1 * m1)
+        return float(np.clip(b, min(x1, xj), max(x1, xj)))
+
+
+def history_extent(problem, P, M, margin=0.03, sub=8):
+    """Grid covering every contact along the straight steps of (P, M) (edges sampled ``sub`` times a step)."""
+    lo, hi = math.inf, -math.inf
+    for k in range(1, len(P)):
+        for lam in np.linspace(0.0, 1.0, sub + 1)[1:]:
+            Pl = P[k - 1] + lam * (P[k] - P[k - 1])
+            if Pl <= 0.0:
+                continue
+            sol = problem.solve(Pl, M[k - 1] + lam * (M[k] - M[k - 1]))
+            lo, hi = min(lo, sol.left), max(hi, sol.right)
+    w = hi - lo
+    return lo - margin * w, hi + margin * w
+
+
+def run_history(problem, friction, n, P, Q, M, sigma, extent=None, strategy="toeplitz", keep_q=False,
+                progress=None):
+    """March the samples (P[0..], ...) with point 0 the start (normally all zero). Returns a dict of arrays."""
+    P, Q, M, sigma = (np.asarray(v, dtype=float) for v in (P, Q, M, sigma))
+    if extent is None:
+        extent = history_extent(problem, P, M)
+    solver = ICBaseline(problem, friction, n, extent, strategy=strategy)
+    solver.P, solver.Q, solver.M, solver.sigma = P[0], Q[0], M[0], sigma[0]
+    steps = len(P) - 1
+    out = {k: np.full(steps, np.nan) for k in (
+        "contact_left", "contact_right", "stick_left", "stick_right", "stick_left_cell", "stick_right_cell",
+        "shift", "dissipation", "dissipation_increment", "time", "iterations", "substeps", "solves",
+        "cg_iterations")}
+    out["intervals"] = np.zeros(steps, dtype=int)
+    out["converged"] = np.zeros(steps, dtype=bool)
+    out["gross"] = np.zeros(steps, dtype=bool)
+    qs = []
+    messages = []
+    for k in range(steps):
+        before = solver.dissipation
+        rep = solver.step(P[k + 1], Q[k + 1], M[k + 1], sigma[k + 1])
+        z = solver.zones()
+        out["contact_left"][k], out["contact_right"][k] = solver.contact
+        out["stick_left"][k], out["stick_right"][k] = z["stick"]
+        out["stick_left_cell"][k], out["stick_right_cell"][k] = z["cell"]
+        out["intervals"][k] = z["count"]
+        out["shift"][k] = solver.shift
+        out["dissipation"][k] = solver.dissipation
+        out["dissipation_increment"][k] = solver.dissipation - before
+        out["time"][k] = rep.time
+        out["iterations"][k] = rep.iterations
+        out["substeps"][k] = rep.substeps
+        out["solves"][k] = rep.solves
+        out["cg_iterations"][k] = rep.cg_iterations
+        out["converged"][k] = rep.converged
+        out["gross"][k] = rep.gross
+        messages += [f"step {k + 1}: {m}" for m in rep.messages]
+        if keep_q:
+            qs.append(solver.q.copy())
+        if progress is not None:
+            progress(k, steps, rep)
+    out["messages"] = messages
+    out["x"] = solver.x
+    if keep_q:
+        out["q"] = np.array(qs)
+    out["solver"] = solver
+    return out
