@@ -286,12 +286,19 @@ class ICBaseline:
         s = np.linspace(0.0, 1.0, nodes)
         if graded:  # the contact forms at lam = 0+: the first node just after it
             s[0] = 1e-6
-        lam = s**2 if graded else s
         left, right = np.empty(nodes), np.empty(nodes)
-        for k, la in enumerate(lam):
-            P = l0[0] + la * (l1[0] - l0[0])
-            M = l0[2] + la * (l1[2] - l0[2])
-            sol = self._normal(P, M)
+        for k in range(nodes):
+            while True:
+                la = s[k] ** 2 if graded else s[k]
+                P = l0[0] + la * (l1[0] - l0[0])
+                M = l0[2] + la * (l1[2] - l0[2])
+                try:
+                    sol = self._normal(P, M)
+                    break
+                except ValueError:  # the general normal solver fails at tiny P with M != 0 (punch)
+                    if not (graded and k == 0 and s[0] < 0.25 * s[1]):
+                        raise
+                    s[0] *= 10.0
             left[k], right[k] = (sol.left, sol.right) if sol is not None else (0.0, 0.0)
         return s, CubicSpline(s, left), CubicSpline(s, right), graded
 
