@@ -2,13 +2,19 @@
 
     python benchmarks/bench_baseline_ic.py [--steps 24] [--n 1000 2000]
 
-Runs benchmarks/baseline_ic.py with strategy 'toeplitz' (one cached Cholesky of the Toeplitz matrix,
-leading-block sweeps; block-Jacobi PCG for split stick sets), 'dense' (LAPACK Cholesky of each stick
-set, cached per set) and 'lu' (LU from scratch every solve, the old straw man) on the same steps, and
+Runs benchmarks/baseline_ic.py with strategy 'gs' (Gohberg-Semencul inverse of each Toeplitz run from
+one cached inverse Cholesky factor, FFT products), 'toeplitz' (the cached Cholesky factor of the
+Toeplitz matrix, triangular sweeps over its leading block), 'dense' (LAPACK Cholesky of each stick
+set, cached per set) and 'lu' (LU from scratch every solve, the old straw man) on the same steps
+(split stick sets: block-Jacobi PCG with the run solves in the first two), and
 prints the time per step and per stick-set solve, and the largest difference of the stick edges from
 the 'toeplitz' run (the three must agree to rounding).
 """
 from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # shared 2-core machine: threaded BLAS spins (10-100x slower)
 
 import argparse
 import sys
@@ -28,7 +34,7 @@ def main(argv=None):
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--steps", type=int, default=24)
     ap.add_argument("--n", type=int, nargs="+", default=[1000, 2000])
-    ap.add_argument("--strategies", nargs="+", default=["toeplitz", "dense", "lu"])
+    ap.add_argument("--strategies", nargs="+", default=["gs", "toeplitz", "dense", "lu"])
     args = ap.parse_args(argv)
     info = {}
     _, _, P, Q, M, S = random_history(args.seed, args.geometry, info=info)
