@@ -7,6 +7,10 @@ next to each check with the reason for their size; h is the element width.
 """
 from __future__ import annotations
 
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # shared 2-core machine: threaded BLAS spins
+
 import math
 import sys
 from pathlib import Path
@@ -212,3 +216,38 @@ def test_strategies_agree_on_random_history(geometry):
         np.testing.assert_allclose(a, b, rtol=1e-7, atol=1e-12 * np.nanmax(np.abs(a)), err_msg=key)
     assert outs[0]["converged"].all()
     np.testing.assert_array_equal(outs[0]["intervals"], outs[1]["intervals"])
+
+
+# -- the measured numbers quoted in docs/baseline_ic.md ------------------------------
+def _measure(ns=(250, 500, 1000, 2000, 4000)):
+    """python benchmarks/test_baseline_ic.py: convergence of the closed-form cases with N."""
+    a = a_of(P0)
+    rows = []
+    for n in ns:
+        s = march(n, [(P0, 0.0, 0.0, 0.0)])
+        worst = worst_cell = 0.0
+        for k in range(1, 9):
+            r = 0.1 * k
+            s.step(P0, r * F * P0, 0.0, 0.0)
+            b = a * math.sqrt(1 - r)
+            z = s.zones()
+            worst = max(worst, abs(z["stick"][1] - b), abs(z["stick"][0] + b))
+            worst_cell = max(worst_cell, abs(z["cell"][1] - b), abs(z["cell"][0] + b))
+        q = F * (p_hertz(s.x, P0) - p_hertz(s.x, P0 * 0.2))
+        cm_q = q_error(s, q)
+        arr, slipping, _ = arrival_error(n)
+        trap = arrival_error(n, exact=False)[0] if n <= 1000 else math.nan
+        rows.append((n, worst / (2 * a), worst_cell / (2 * a), cm_q, arr, slipping, trap))
+        print(f"| {n} | {rows[-1][1]:.2e} | {rows[-1][2]:.2e} | {cm_q:.2e} | {arr:.2e} | {slipping} | {trap:.2e} |",
+              flush=True)
+    for col, name in ((1, "edge (interpolated)"), (2, "edge (element boundary)"), (3, "q, J1 at 0.8 f P"),
+                      (4, "q, arrival")):
+        v = np.array([r[col] for r in rows])
+        print(name, "orders", np.round(np.log2(v[:-1] / v[1:]), 2))
+
+
+if __name__ == "__main__":
+    print("| N | CM edge error / width (max over Q = 0.1..0.8 f P) | same, element boundaries | "
+          "CM q error at 0.8 f P | arrival q error | arrival: slipping elements | trap (pinned) q error |")
+    print("|---:|---:|---:|---:|---:|---:|---:|")
+    _measure()
