@@ -556,10 +556,10 @@ class ICBaseline:
         idx = np.flatnonzero(inside)
         nan = (math.nan, math.nan)
         if idx.size == 0:
-            return dict(count=0, stick=nan, cell=nan)
+            return dict(count=0, stick=nan, cell=nan, main=nan, island=0.0)
         st = idx[self.sign[idx] == 0.0]
         if st.size == 0:
-            return dict(count=0, stick=nan, cell=nan)
+            return dict(count=0, stick=nan, cell=nan, main=nan, island=0.0)
         breaks = np.flatnonzero(np.diff(st) > 1) + 1
         count = breaks.size + 1
         i0, i1 = st[0], st[-1]
@@ -567,7 +567,12 @@ class ICBaseline:
         right = self._edge(i1, +1, idx)
         cell = (self.edges[i0] if i0 != idx[0] else self.contact[0],
                 self.edges[i1 + 1] if i1 != idx[-1] else self.contact[1])
-        return dict(count=count, stick=(left, right), cell=cell)
+        runs = np.split(st, breaks)
+        edges = [(self._edge(r[0], -1, idx), self._edge(r[-1], +1, idx)) for r in runs]
+        widths = [b - a for a, b in edges]
+        k = int(np.argmax(widths))
+        others = max([w for j, w in enumerate(widths) if j != k], default=0.0)
+        return dict(count=count, stick=(left, right), cell=cell, main=edges[k], island=others)
 
     def _edge(self, i, outward, idx):
         if (outward < 0 and i == idx[0]) or (outward > 0 and i == idx[-1]):
@@ -602,7 +607,7 @@ def history_extent(problem, P, M, margin=0.03, sub=8):
 
 
 def run_history(problem, friction, n, P, Q, M, sigma, extent=None, strategy="gs", keep_q=False,
-                progress=None, **options):
+                progress=None, time_split=1, **options):
     """March the samples (P[0..], ...) with point 0 the start (normally all zero). Returns a dict of arrays."""
     P, Q, M, sigma = (np.asarray(v, dtype=float) for v in (P, Q, M, sigma))
     if extent is None:
@@ -612,6 +617,7 @@ def run_history(problem, friction, n, P, Q, M, sigma, extent=None, strategy="gs"
     steps = len(P) - 1
     out = {k: np.full(steps, np.nan) for k in (
         "contact_left", "contact_right", "stick_left", "stick_right", "stick_left_cell", "stick_right_cell",
+        "main_left", "main_right", "island", "late",
         "shift", "dissipation", "dissipation_increment", "time", "iterations", "substeps", "solves",
         "cg_iterations")}
     out["intervals"] = np.zeros(steps, dtype=int)
@@ -621,12 +627,23 @@ def run_history(problem, friction, n, P, Q, M, sigma, extent=None, strategy="gs"
     messages = []
     for k in range(steps):
         before = solver.dissipation
-        rep = solver.step(P[k + 1], Q[k + 1], M[k + 1], sigma[k + 1])
+        if time_split > 1:  # equal straight sub-steps (a check of the time discretisation)
+            reps = [solver.step(*(v[k] + j / time_split * (v[k + 1] - v[k]) for v in (P, Q, M, sigma)))
+                    for j in range(1, time_split + 1)]
+            rep = StepReport(converged=all(r.converged for r in reps), iterations=sum(r.iterations for r in reps),
+                             substeps=sum(r.substeps for r in reps), solves=sum(r.solves for r in reps),
+                             cg_iterations=sum(r.cg_iterations for r in reps), time=sum(r.time for r in reps),
+                             gross=any(r.gross for r in reps), messages=sum((r.messages for r in reps), []))
+        else:
+            rep = solver.step(P[k + 1], Q[k + 1], M[k + 1], sigma[k + 1])
         z = solver.zones()
         out["contact_left"][k], out["contact_right"][k] = solver.contact
         out["stick_left"][k], out["stick_right"][k] = z["stick"]
         out["stick_left_cell"][k], out["stick_right_cell"][k] = z["cell"]
         out["intervals"][k] = z["count"]
+        out["main_left"][k], out["main_right"][k] = z["main"]
+        out["island"][k] = z["island"]
+        out["late"][k] = rep.late
         out["shift"][k] = solver.shift
         out["dissipation"][k] = solver.dissipation
         out["dissipation_increment"][k] = solver.dissipation - before
