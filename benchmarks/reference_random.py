@@ -56,12 +56,12 @@ KEEP = ("contact_left", "contact_right", "stick_left", "stick_right", "stick_lef
         "intervals", "dissipation", "shift", "time", "iterations", "substeps", "converged", "gross")
 
 
-def run_file(geometry, seed, n):
-    return RUNS / f"{geometry}_{seed}_{n}.npz"
+def run_file(geometry, seed, n, split=1):
+    return RUNS / (f"{geometry}_{seed}_{n}.npz" if split == 1 else f"{geometry}_{seed}_{n}_t{split}.npz")
 
 
-def baseline_run(geometry, seed, n):
-    path = run_file(geometry, seed, n)
+def baseline_run(geometry, seed, n, split=1):
+    path = run_file(geometry, seed, n, split)
     if path.exists():
         return dict(np.load(path))
     info = {}
@@ -74,13 +74,14 @@ def baseline_run(geometry, seed, n):
             print(f"    {geometry} seed {seed} N {n}: step {k + 1}/{steps}, {time.perf_counter() - started:.0f} s",
                   flush=True)
 
-    out = run_history(info["problem"], info["friction"], n, P, Q, M, S, extent=extent, progress=progress)
+    out = run_history(info["problem"], info["friction"], n, P, Q, M, S, extent=extent, progress=progress,
+                      time_split=split)
     data = {k: np.asarray(out[k]) for k in KEEP}
     data.update(t=t, P=P, Q=Q, M=M, sigma=S, extent=np.array(extent), wall=np.array(time.perf_counter() - started),
                 messages=np.array(out["messages"], dtype=str))
     RUNS.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(path, **data)
-    print(f"  {geometry} seed {seed} N {n}: {data['wall']:.0f} s, {1e3 * data['wall'] / len(t[1:]):.0f} ms/step, "
+    print(f"  {geometry} seed {seed} N {n} time split {split}: {data['wall']:.0f} s, {1e3 * data['wall'] / len(t[1:]):.0f} ms/step, "
           f"not converged {int((~data['converged']).sum())}, split steps {int((data['intervals'] > 1).sum())}",
           flush=True)
     return data
@@ -281,6 +282,25 @@ def report(geometries, seeds, ns, general, command):
                          f"{nan_mismatch(gen, ref)} | {de:.1e} | {len(msgs)} | "
                          f"{kept} ({kept_total}) |")
         lines.append("")
+    # time discretisation: equal sub-steps of every step at one N
+    rows = []
+    for g in geometries:
+        for path in sorted(RUNS.glob(f"{g}_0_*_t*.npz")):
+            n, split = path.stem.split("_")[2], int(path.stem.split("_t")[-1])
+            a, b = dict(np.load(run_file(g, 0, int(n)))), dict(np.load(path))
+            W = a["contact_right"] - a["contact_left"]
+            d = stats(edge_diffs(b, a, W, same_count=True))
+            dm = stats(edge_diffs(b, a, W, sides=MAIN))
+            rows.append(f"| {g} seed 0 | {n} | {split} | {d[0]:.1e} / {d[1]:.1e} / {d[2]:.1e} | "
+                        f"{dm[0]:.1e} / {dm[1]:.1e} / {dm[2]:.1e} | "
+                        f"{int(np.sum(a['intervals'] != b['intervals']))} | "
+                        f"{abs(b['dissipation'][-1] / a['dissipation'][-1] - 1):.1e} |")
+    if rows:
+        lines += ["**Time discretisation of the reference**: every step cut into k equal straight sub-steps "
+                  "(`run_history(..., time_split=k)`), against k = 1 at the same N:", "",
+                  "| history | N | k | outermost edges, equal interval counts: median / 95th / max | widest "
+                  "interval's edges: median / 95th / max | steps whose interval count differs | final "
+                  "dissipation (rel.) |", "|---|---:|---:|---:|---:|---:|---:|", *rows, ""]
     lines.append(END)
     block = "\n".join(lines)
     print(block)
@@ -298,6 +318,8 @@ def main(argv=None):
     ap.add_argument("--geometries", nargs="+", default=["hertz", "punch"])
     ap.add_argument("--no-general", action="store_true", help="skip the package's general solver")
     ap.add_argument("--report-only", action="store_true", help="use the cached runs only")
+    ap.add_argument("--time-check", type=int, nargs=2, metavar=("N", "K"),
+                    help="also run seed 0 of each geometry at N with every step cut into K sub-steps")
     args = ap.parse_args(argv)
     command = "python benchmarks/reference_random.py " + " ".join(argv if argv is not None else sys.argv[1:])
     if not args.report_only:
@@ -308,6 +330,10 @@ def main(argv=None):
         if not args.no_general:
             for g in args.geometries:
                 general_run(g, 0)
+        if args.time_check:
+            for g in args.geometries:
+                baseline_run(g, 0, args.time_check[0])
+                baseline_run(g, 0, args.time_check[0], split=args.time_check[1])
     report(args.geometries, args.seeds, sorted(args.n), not args.no_general, command.strip())
 
 
