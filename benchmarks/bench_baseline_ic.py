@@ -29,7 +29,7 @@ from baseline_ic import history_extent, run_history  # noqa: E402
 from random_histories import random_history  # noqa: E402
 
 
-def solves(ns):
+def time_solves(ns):
     """Time of one run solve T_n^{-1} b (n = 0.7 N, a typical stick run) per strategy, and its residual."""
     from scipy.linalg import cho_factor, cho_solve
 
@@ -88,7 +88,7 @@ def main(argv=None):
     ap.add_argument("--solves", action="store_true", help="time single run solves instead (N from --n)")
     args = ap.parse_args(argv)
     if args.solves:
-        solves(args.n)
+        time_solves(args.n)
         return
     info = {}
     _, _, P, Q, M, S = random_history(args.seed, args.geometry, info=info)
