@@ -11,7 +11,7 @@ from typing import Any
 
 import click
 
-from . import __version__
+from ._version import __version__
 from .errors import HalfslipInputError, excerpt
 from .geometry import Hertz, ProfileSpanError, RoundedPunch, TabulatedProfile
 from .scene import Scene, load_scene, scene_error
@@ -336,8 +336,8 @@ def check_figure_output(target, source) -> None:
     """Refuse, before drawing, a figure path that is not a figure format or is the result itself."""
     from .io import _same_file
 
-    if target.is_dir() or str(target).endswith(("/", "\\")):
-        return
+    if target.is_dir() or str(target).endswith(("/", "\\")) or not target.suffix:
+        return  # a folder (made when missing): the figures get their own names
     suffix = target.suffix.lower().lstrip(".")
     if suffix not in FIGURE_FORMATS:
         raise HalfslipInputError(f"a figure is written as {', '.join(FIGURE_FORMATS)} (by its ending); "
