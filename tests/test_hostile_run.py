@@ -129,6 +129,16 @@ def canary_command(canary: Path) -> str:
     return f"touch {canary}"
 
 
+def pickled_command(canary: Path) -> bytes:
+    """A pickle that runs ``touch canary`` when unpickled."""
+
+    class Payload:
+        def __reduce__(self):
+            return (os.system, (canary_command(canary),))
+
+    return pickle.dumps(Payload())
+
+
 # -- the original defect and its relatives: names that would reach code -----------------------
 
 def _routes(canary: Path):
@@ -165,15 +175,10 @@ def test_checkpoint_names_never_reach_code(unfinished, tmp_path, route):
 
 def test_a_pickle_is_never_unpickled(unfinished, tmp_path):
     canary = tmp_path / "canary"
-
-    class Payload:
-        def __reduce__(self):
-            return (os.system, (canary_command(canary),))
-
-    blob = np.frombuffer(pickle.dumps(Payload()), dtype=np.uint8)
+    blob = np.frombuffer(pickled_command(canary), dtype=np.uint8)
 
     def add_pickles(f):
-        f["checkpoint"].attrs["tree"] = np.void(pickle.dumps(Payload()))  # the tree itself a pickle
+        f["checkpoint"].attrs["tree"] = np.void(blob.tobytes())  # the tree itself a pickle
         f["checkpoint"].create_dataset("pickle", data=np.void(blob.tobytes()))  # and an opaque dataset
         f.attrs["pickle"] = np.void(blob.tobytes())
 
@@ -189,12 +194,7 @@ def test_pickles_in_plain_arrays_stay_numbers(unfinished, tmp_path):
     with h5py.File(source, "r") as f:
         tree = json.loads(f["checkpoint"].attrs["tree"])
     canary = tmp_path / "canary"
-
-    class Payload:
-        def __reduce__(self):
-            return (os.system, (canary_command(canary),))
-
-    payload = np.frombuffer(pickle.dumps(Payload()), dtype=np.uint8)
+    payload = np.frombuffer(pickled_command(canary), dtype=np.uint8)
 
     def swap_array(f):
         del f["checkpoint/a0"]
