@@ -303,7 +303,9 @@ def scene_hash(scene) -> str:
     """SHA-256 of the scene text (of its repr for a scene built in Python)."""
     import hashlib
 
-    text = scene.text if scene.text is not None else repr(scene)
+    from .scene import scene_fingerprint
+
+    text = scene.text if scene.text is not None else scene_fingerprint(scene)
     return hashlib.sha256(text.encode()).hexdigest()
 
 
