@@ -334,8 +334,8 @@ def check_figure_output(target, source) -> None:
     """Refuse, before drawing, a figure path that is not a figure format or is the result itself."""
     from .io import _same_file
 
-    if target.is_dir() or str(target).endswith(("/", "\\")):
-        return
+    if target.is_dir() or not target.suffix or str(target).endswith(("/", "\\")):
+        return  # a folder, made by write_figures (plot.py: a path without an ending is a folder)
     suffix = target.suffix.lower().lstrip(".")
     if suffix not in FIGURE_FORMATS:
         raise HalfslipInputError(f"a figure is written as {', '.join(FIGURE_FORMATS)} (by its ending); "

@@ -271,6 +271,6 @@ def _per_cycle_quantities(scene, index, seg) -> xr.Dataset:
 
 
 def _version() -> str:
-    from . import __version__
+    from ._version import __version__
 
     return __version__
