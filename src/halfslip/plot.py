@@ -745,7 +745,7 @@ def _loop_data(ds: xr.Dataset):
                   for c, a, b in zip(table["cycle"].values, table["t_start"].values, table["t_stop"].values)]
         return (loops["Q"].values, loops["shift_slip"].values, loops["compliance"].values, labels,
                 loops["work"].values, energy["dissipation"].values)
-    Q, shift = ds["Q"].values, ds["shift"].values
+    Q, shift = ds["Q"].values, ds["rigid_shift"].values
     C = post.elastic_compliance(Q, shift, ds["regime"].values)
     return Q[None], (shift - C * Q)[None], np.array([C]), ["whole run (no cycles)"], None, None
 
@@ -770,7 +770,7 @@ def loop(ds: xr.Dataset, ax=None) -> Figure:
     Parameters
     ----------
     ds : xarray.Dataset
-        A run (loads and ``shift``). Without cycles the whole run's path is drawn.
+        A run (loads and ``rigid_shift``). Without cycles the whole run's path is drawn.
     ax : matplotlib Axes, Figure or SubFigure, optional
         Where to draw (default: a new figure).
 
@@ -779,8 +779,8 @@ def loop(ds: xr.Dataset, ax=None) -> Figure:
     matplotlib.figure.Figure
     """
     post.check_result(ds)
-    if "shift" not in ds.data_vars:
-        raise HalfslipInputError("the loop figure needs the variable shift, which this result lacks")
+    if "rigid_shift" not in ds.data_vars:
+        raise HalfslipInputError("the loop figure needs the variable rigid_shift, which this result lacks")
     fig, ax = _one_axes(ax, (9.0, 5.0))
     Q, slip_shift, compliance, labels, work, dissipation = _loop_data(ds)
     kQ, uQ = unit_scale(Q, "N/m")

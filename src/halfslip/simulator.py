@@ -138,7 +138,7 @@ class _Records:
     """
 
     names = ("t", "P", "Q", "M", "sigma", "contact_left", "contact_right",
-             "stick_left", "stick_right", "regime", "shift", "dissipation", "converged", "residual")
+             "stick_left", "stick_right", "regime", "rigid_shift", "dissipation", "converged", "residual")
 
     def __init__(self):
         self.chunks = {k: [] for k in self.names}
@@ -161,7 +161,7 @@ class _Records:
         c["stick_left"].append(state.stick_left)
         c["stick_right"].append(state.stick_right)
         c["regime"].append(int(regime))
-        c["shift"].append(state.shift)
+        c["rigid_shift"].append(state.shift)
         c["dissipation"].append(state.dissipation)
         c["converged"].append(int(converged))
         c["residual"].append(residual)
@@ -394,6 +394,7 @@ class _Run:
         if jump is not None:
             mask[-1] = False  # the jumped state is stored in its place, as in the step path
         steps.update(t=h.t[idx], P=h.P[idx], Q=h.Q[idx], M=h.M[idx], sigma=h.sigma[idx])
+        steps["rigid_shift"] = steps.pop("shift")
         self.rec.add_steps(steps, mask)
         self.i, self.state = stop, state
         if jump is not None:
@@ -622,7 +623,7 @@ _META = {
     "stick_left": ("m", "left stick-zone edge"),
     "stick_right": ("m", "right stick-zone edge"),
     "regime": ("1", "contact regime"),
-    "shift": ("m", "rigid tangential displacement of pad relative to substrate"),
+    "rigid_shift": ("m", "rigid tangential displacement of pad relative to substrate"),
     "dissipation": ("J/m", "frictional energy dissipated since the start"),
     "p": ("Pa", "contact pressure"),
     "q": ("Pa", "shear traction exerted by the pad on the substrate"),
@@ -646,6 +647,10 @@ def _dataset(rec: _Records, save: SaveAt) -> xr.Dataset:
     for k in ds.variables:
         units, long_name = _META[k]
         ds[k].attrs.update(units=units, long_name=long_name)
+    ds["t"].attrs["axis"] = "T"
+    if "x" in ds.coords:
+        ds["x"].attrs["axis"] = "X"
+    ds.attrs["Conventions"] = "CF-1.10"
     ds["regime"].attrs.update(
         flag_values=np.arange(4, dtype=np.int8), flag_meanings=Regime.flag_meanings()
     )
