@@ -376,20 +376,30 @@ def test_an_output_holding_another_sweep_is_refused(tmp_path, cli):
         hs.sweep(one, output=tmp_path / "plain.h5", workers=1, progress=False)
 
 
-def test_the_progress_line_counts_cases_and_time_left():
+def test_the_progress_line_counts_cases_and_time_left(monkeypatch):
     import io
+
+    import tqdm.std
 
     from halfslip.sweep import _ProgressLine
 
+    clock = [100.0]
+    monkeypatch.setattr(tqdm.std, "time", lambda: clock[0])
     stream = io.StringIO()
     line = _ProgressLine(True, stream)
-    line.started -= 2.0  # two seconds in
-    line(3, 1, 10, 3)
+    line.start(10, 0)
+    for done in (1, 2, 3):
+        clock[0] += 2.0 / 3  # three cases in two seconds
+        line(done, 1, 10, done)
     line.close()
     text = stream.getvalue()
-    assert text.startswith("\r  cases 3/10, 1 failed, 1.5 cases/s, 5 s left") and text.endswith("\n")
+    last = text.rstrip("\n").split("\r")[-1]
+    assert "cases" in last and " 3/10 " in last and "1 failed" in last, last
+    assert "1.50case/s" in last and "<00:04" in last, last  # 7 cases left at 1.5 cases/s: 4.7 s
+    assert text.endswith("\n")
     quiet = io.StringIO()
     off = _ProgressLine(False, quiet)
+    off.start(10, 0)
     off(3, 1, 10, 3)
     off.close()
     assert quiet.getvalue() == ""

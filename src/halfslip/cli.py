@@ -209,35 +209,6 @@ def describe_profile(profile: Any) -> str:
     return repr(profile)
 
 
-class _Progress:
-    """Progress on a terminal, for runs longer than a second; silent otherwise."""
-
-    def __init__(self, enabled: bool):
-        import time
-
-        self._clock = time.perf_counter
-        self.enabled = enabled
-        self.started = self._clock()
-        self.last = self.started
-        self.shown = False
-
-    def __call__(self, i: int, n: int) -> None:
-        if not self.enabled:
-            return
-        now = self._clock()
-        if now - self.started < 1.0 or (now - self.last < 0.2 and i < n):
-            return
-        self.last = now
-        rate = i / (now - self.started)
-        left = (n - i) / rate if rate > 0 else float("nan")
-        click.echo(f"\r  step {i}/{n}  {100 * i / n:5.1f} %  {rate:,.0f} steps/s  {left:6.1f} s left ", nl=False, err=True)
-        self.shown = True
-
-    def close(self) -> None:
-        if self.shown:
-            click.echo("", err=True)
-
-
 @main.command()
 @click.argument("scene_file", metavar="SCENE.yaml")
 @click.option("-o", "--output", "output", metavar="OUT.h5", help="Result file (default: the scene name with .h5, here).")
@@ -268,6 +239,7 @@ def run(scene_file: str, output: str | None, method: str | None, nodes: int | No
     from pathlib import Path
 
     from .io import OutputLock, RunFileWriter, check_output
+    from .progress import Progress
     from .simulator import MethodError, simulate
 
     scene = load_scene(scene_file)
@@ -285,7 +257,7 @@ def run(scene_file: str, output: str | None, method: str | None, nodes: int | No
     with OutputLock(out):
         previous_run = read_unfinished_run(out, scene) if resume else None
         handlers = {sig: signal.signal(sig, _request_stop) for sig in (signal.SIGINT, signal.SIGTERM)}
-        progress = _Progress(enabled=not quiet and sys.stderr.isatty())
+        progress = Progress("step", scene.name, enabled=not quiet and sys.stderr.isatty(), delay=1.0)
         try:
             result = simulate(scene, method=method, nodes=nodes, progress=progress,
                               writer=RunFileWriter(out, min_interval=checkpoint_every), resume=previous_run,

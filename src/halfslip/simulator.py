@@ -16,6 +16,7 @@ import numpy as np
 import xarray as xr
 
 from .geometry import NormalProblem
+from .progress import progress_for
 from .scene import check_run_bytes
 from .state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime
 
@@ -197,7 +198,7 @@ def simulate(
     *,
     method: str | None = None,
     nodes: int | None = None,
-    progress: Callable[[int, int], None] | None = None,
+    progress: bool | Callable[[int, int], None] | None = None,
     writer=None,
     resume=None,
     stop_requested: Callable[[], bool] | None = None,
@@ -211,8 +212,12 @@ def simulate(
         Overrides ``scene.solver.method``.
     nodes : int, optional
         Overrides ``scene.solver.nodes`` (general solver resolution).
-    progress : callable(i, n), optional
-        Called after each step with the step index and the number of steps.
+    progress : bool, callable(i, n) or progress.Progress, optional
+        True shows a progress bar (on a terminal or in a notebook,
+        :mod:`halfslip.progress`): its total drops when steady cycles are
+        skipped, and its time left follows the recent rate. A callable is
+        called after each step (or skip) with the step index reached and the
+        number of steps.
     writer : io.RunFileWriter, optional
         Receives the partial result and a checkpoint whenever it is due, and the
         final result; a killed process loses at most what came after the last write.
@@ -241,16 +246,20 @@ def simulate(
     h = scene.history
     n = h.n_steps
     started = time.perf_counter()
+    bar = progress_for(progress, "step", scene.name)
+    skipped = run.skipped_steps()
+    bar.start(n - skipped, run.i - skipped)
     try:
         while run.i < n:
             if stop_requested is not None and stop_requested():
                 raise KeyboardInterrupt
+            before = run.i
             if resume is not None and run.i == int(resume[1]["i"]):
                 _first_step_after_resume(run)
             else:
                 run.advance()
-            if progress is not None:
-                progress(run.i, n)
+            skipped, newly = run.skipped_steps(), run.skipped_steps() - skipped
+            bar.advance(run.i - before - newly, newly)
             if writer is not None and writer.due():
                 writer.write(run.dataset(complete=0, elapsed=time.perf_counter() - started), run.checkpoint(
                     time.perf_counter() - started))
@@ -259,6 +268,8 @@ def simulate(
         if writer is not None:
             writer.write(ds, run.checkpoint(time.perf_counter() - started))
         return ds
+    finally:
+        bar.close()
     ds = run.dataset(complete=1, elapsed=time.perf_counter() - started)
     _add_permanent_stick(ds)
     if writer is not None:
@@ -335,6 +346,10 @@ class _Run:
         # compiled marching of many steps at once where the solver offers it (extents only)
         self.chunked = not fields and self.solver.can_march
         self._store(Regime.SEPARATED)
+
+    def skipped_steps(self) -> int:
+        """Steps of the history skipped so far as repeats of a steady cycle."""
+        return 0 if self.skipper is None else self.skipper.skipped_steps
 
     def _store(self, regime: Regime, converged: bool = True, residual: float = 0.0) -> None:
         self.rec.add(self.state, regime, converged, residual)
@@ -538,6 +553,7 @@ class CycleSkipper:
                     self.ends[seg.start + j * seg.steps_per_cycle] = (k, seg)
                 self.segment_of.append((seg.start, seg.stop, k))
         self.t = history.t
+        self.segments = history.segments
         self.previous = {}
         self.skipped = {}
         self.traces = {}  # segment index -> {"previous": edges of the last cycle, "current": this one's}
@@ -576,6 +592,11 @@ class CycleSkipper:
     @property
     def total(self) -> int:
         return sum(self.skipped.values())
+
+    @property
+    def skipped_steps(self) -> int:
+        """Steps not marched: skipped cycles times their steps per cycle."""
+        return sum(v * self.segments[k].steps_per_cycle for k, v in self.skipped.items())
 
     def describe(self) -> str:
         return ", ".join(f"loads[{k}]: {v}" for k, v in sorted(self.skipped.items()))

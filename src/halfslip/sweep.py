@@ -67,6 +67,7 @@ from .errors import (
     join,
 )
 from . import limits
+from .progress import interactive
 from .io import PATH_CHARS, read_input_text
 from .scene import _line_of, _read_yaml, parse_scene
 
@@ -927,44 +928,32 @@ def is_sweep_result(ds: xr.Dataset) -> bool:
 
 
 class _ProgressLine:
-    """``cases 120/1000, 3 failed, 57.3 cases/s, 15 s left`` on a terminal (stderr)."""
+    """Cases done of all, failed, cases/s and time left: :class:`halfslip.progress.Progress`.
+
+    A line on a terminal (stderr), a bar in a notebook; the rate is the
+    recent one (an exponential mean), not the average since the start.
+    """
 
     def __init__(self, enabled: bool, stream=None):
-        self.stream = stream or sys.stderr
-        self.enabled = enabled
-        self.started = time.perf_counter()
-        self.last = 0.0
-        self.shown = False
+        from .progress import Progress
+
+        self.progress = Progress("case", "cases", enabled=enabled, file=stream)
+        self.done = None
+
+    def start(self, total: int, done: int) -> None:
+        """Show the bar: `done` of `total` cases are done before this call runs any."""
+        self.progress.start(total, done)
+        self.done = done
 
     def __call__(self, done: int, failed: int, total: int, ran: int) -> None:
-        if not self.enabled:
-            return
-        now = time.perf_counter()
-        if now - self.last < 0.2 and done < total:
-            return
-        self.last = now
-        elapsed = now - self.started
-        rate = ran / elapsed if elapsed > 0 else 0.0
-        left = (total - done) / rate if rate > 0 else math.nan
-        self.stream.write(f"\r  cases {done}/{total}, {failed} failed, {rate:,.3g} cases/s, "
-                          f"{_duration(left)} left ")
-        self.stream.flush()
-        self.shown = True
+        if self.done is None:
+            self.start(total, done - ran)
+        self.progress.note(f"{failed} failed")
+        self.progress.advance(done - self.done)
+        self.done = done
 
     def close(self) -> None:
-        if self.shown:
-            self.stream.write("\n")
-            self.stream.flush()
-
-
-def _duration(seconds: float) -> str:
-    if not math.isfinite(seconds):
-        return "? s"
-    if seconds < 120:
-        return f"{seconds:.0f} s"
-    if seconds < 7200:
-        return f"{seconds / 60:.1f} min"
-    return f"{seconds / 3600:.1f} h"
+        self.progress.close()
 
 
 def sweep(
@@ -999,7 +988,8 @@ def sweep(
         Also write each case's full result (steady-state or simulation
         dataset) to ``case_<index>.h5`` in this folder.
     progress : bool or callable(done, failed, total)
-        True shows a progress line on stderr when it is a terminal; a
+        True shows a progress line on stderr when it is a terminal (a bar in
+        a notebook, :mod:`halfslip.progress`); a
         callable is called in this process after every finished case.
         Raising KeyboardInterrupt from it stops the sweep like Ctrl-C.
     checkpoint_seconds : float
@@ -1049,7 +1039,8 @@ def sweep(
             raise HalfslipInputError(f"must be >= 1, got {workers}", field="workers")
         backend = "in-process" if min(workers, len(pending)) <= 1 else "processes"
     width = len(str(max(spec.n_cases - 1, 0)))
-    show = _ProgressLine(progress is True and sys.stderr.isatty())
+    show = _ProgressLine(progress is True and interactive())
+    show.start(spec.n_cases, spec.n_cases - len(pending))
     callback = progress if callable(progress) else None
     attrs = {
         "title": f"halfslip sweep over {', '.join(spec.paths)}",
