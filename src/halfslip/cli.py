@@ -365,11 +365,10 @@ def summarize(result, path) -> list[str]:
     :mod:`halfslip.post`; a line that cannot be derived (e.g. an interrupted
     run without a full cycle) is left out.
     """
-    import re
-
     import numpy as np
 
     from . import post
+    from .messages import summary as message_summary
     from .state import Regime
 
     regime = result["regime"].values[1:] if result.sizes["t"] > 1 else result["regime"].values
@@ -417,13 +416,9 @@ def summarize(result, path) -> list[str]:
                      f"(first at t = {t_bad[0]:.6g} s, worst at t = {t_bad[worst]:.6g} s, residual "
                      f"{residual[worst]:.3g} x tolerance); their results are the closest found "
                      "(variables converged, residual)")
-    # one note per kind of solver message (messages differing only in numbers are one kind)
-    groups: dict[str, list[str]] = {}
-    for message in filter(None, str(result.attrs.get("messages", "")).split("\n")):
-        groups.setdefault(re.sub(r"[-+]?\d[\d.]*(?:e[-+]?\d+)?", "#", message), []).append(message)
-    for similar in groups.values():
-        more = f" (and {len(similar) - 1} more like it)" if len(similar) > 1 else ""
-        lines.append(f"  note: {similar[0]}{more}")
+    # one note per kind of solver message: how many, the first and the worst step (halfslip.messages)
+    for line in message_summary(result):
+        lines.append(f"  note: {line}")
     lines.append(f"  written to {path}")
     return lines
 
@@ -469,6 +464,8 @@ def _steady(scene: Scene, segment: int | None, out, steady_state) -> None:
     for key, value in rows:
         click.echo(f"{key:<{width}}  {value}")
     click.echo(f"note: {ds.attrs['note']}")
+    if ds.attrs.get("warning"):
+        click.echo(f"halfslip: warning: {ds.attrs['warning']}", err=True)
     if out is not None:
         from .io import write_result
 

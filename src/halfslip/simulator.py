@@ -16,6 +16,7 @@ import numpy as np
 import xarray as xr
 
 from .geometry import NormalProblem
+from .messages import MessageLog, checkpoint_problem
 from .progress import progress_for
 from .scene import check_run_bytes
 from .state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime
@@ -340,7 +341,7 @@ class _Run:
         self.state = self.solver.initial_state(float(h.t[0]))
         self.rec = _Records()
         self.counters = {"steps": 0, "stick_steps": 0, "slip_solves": 0, "normal_solves": 0, "failed_steps": 0}
-        self.messages: list[str] = []
+        self.log = MessageLog()
         self.skipper = CycleSkipper(h, self.solver) if scene.solver.skip_steady_cycles else None
         self.elapsed_before = 0.0
         # compiled marching of many steps at once where the solver offers it (extents only)
@@ -372,8 +373,8 @@ class _Run:
         c["stick_steps"] += report.regime == Regime.STICK
         c["normal_solves"] += report.normal_solved
         c["failed_steps"] += not report.converged
-        if report.message and report.message not in self.messages:
-            self.messages.append(report.message)
+        if report.message:
+            self.log.add_text(i, float(h.t[i]), report.message, {"gross_sliding": _shear_ratio(loads1, self.scene.friction)})
         jumped = False
         if self.skipper is not None:
             self.skipper.observe(i, state)
@@ -402,8 +403,9 @@ class _Run:
         c["normal_solves"] += int(np.count_nonzero(steps["normal_solved"]))
         gross = (regime == Regime.GROSS_SLIDING) & (np.abs(h.Q[idx]) > self.scene.friction * h.P[idx] * (1 + 1e-12))
         if gross.any():
-            if GROSS_SLIDING_MESSAGE not in self.messages:
-                self.messages.append(GROSS_SLIDING_MESSAGE)
+            at = idx[gross]
+            ratio = np.abs(h.Q[at]) / (self.scene.friction * h.P[at])
+            self.log.add_many("gross_sliding", at, h.t[at], ratio, GROSS_SLIDING_MESSAGE)
         mask = (idx % self.save.every == 0) | (idx == n)
         jump = self.skipper.check(stop, state) if self.skipper is not None else None
         if jump is not None:
@@ -421,6 +423,7 @@ class _Run:
 
         ds = _dataset(self.rec, self.save)
         scene = self.scene
+        log = self.log.copy()
         ds.attrs.update(
             {
                 "title": f"halfslip run of {scene.name}",
@@ -435,7 +438,7 @@ class _Run:
                 "compliance": scene.material.compliance,
                 "shift_datum": self.solver.datum,
                 "wall_time": self.elapsed_before + elapsed,
-                "messages": "\n".join(self.messages),
+                "messages": "",
                 "skipped_cycles": 0 if self.skipper is None else self.skipper.total,
                 "skipped_cycles_per_segment": "" if self.skipper is None else self.skipper.describe(),
                 **{f"count_{k}": v for k, v in self.counters.items()},
@@ -448,8 +451,10 @@ class _Run:
                 note = (f"the widest slip zone spans only {spacings:.3g} lattice spacings: slip and dissipation are "
                         f"resolved to a few per cent (raise solver.nodes towards "
                         f"{int(math.ceil(RESOLVED_SPACINGS / spacings * scene.solver.nodes))})")
-                ds.attrs["messages"] = "\n".join(m for m in (ds.attrs["messages"], note) if m)
-        return ds
+                log.add(self.i, float(scene.history.t[self.i]), "slip_zone_resolution", spacings, note)
+        # the 0.1 form, kept for one release: the distinct texts, one a line (read message_* instead)
+        ds.attrs["messages"] = "\n".join(log.texts())
+        return ds.assign(log.variables())
 
     def checkpoint(self, elapsed: float) -> dict:
         sk = self.skipper
@@ -457,7 +462,7 @@ class _Run:
             "i": self.i,
             "state": self.state,
             "counters": dict(self.counters),
-            "messages": list(self.messages),
+            "messages": self.log.checkpoint(),
             "elapsed": self.elapsed_before + elapsed,
             "skipper": None if sk is None else {"previous": dict(sk.previous), "skipped": dict(sk.skipped),
                                                 "traces": {k: {"previous": v["previous"],
@@ -484,7 +489,7 @@ class _Run:
         self.i = int(checkpoint["i"])
         self.state = checkpoint["state"]
         self.counters = dict(checkpoint["counters"])
-        self.messages = list(checkpoint["messages"])
+        self.log = MessageLog.from_checkpoint(checkpoint["messages"])
         self.elapsed_before = float(checkpoint["elapsed"])
         if self.skipper is not None and checkpoint["skipper"] is not None:
             self.skipper.previous = dict(checkpoint["skipper"]["previous"])
@@ -516,8 +521,9 @@ class _Run:
         if not (isinstance(counters, dict) and set(counters) == set(self.counters)
                 and all(isinstance(v, int) and v >= 0 for v in counters.values())):
             return "its counters are malformed"
-        if not (isinstance(checkpoint["messages"], list) and all(isinstance(m, str) for m in checkpoint["messages"])):
-            return "its messages are not text"
+        problem = checkpoint_problem(checkpoint["messages"])
+        if problem is not None:
+            return problem
         if not isinstance(checkpoint["elapsed"], float):
             return "its elapsed time is not a number"
         if int(ds.sizes.get("t", 0)) > i + 1:
@@ -616,6 +622,12 @@ class CycleSkipper:
         self.skipped[k] = remaining
         new = dataclasses.replace(state, t=float(self.t[seg.stop]), dissipation=state.dissipation + remaining * per_cycle)
         return seg.stop, new
+
+
+def _shear_ratio(loads: Loads, friction: float) -> float:
+    """abs(Q) / (f P): above 1 the contact slides as a whole."""
+    carried = friction * loads.P
+    return abs(loads.Q) / carried if carried > 0 else math.inf
 
 
 def _fields(solver, state: ContactState, save: SaveAt) -> dict:
