@@ -15,6 +15,7 @@ from . import __version__
 from .errors import HalfslipInputError, excerpt
 from .geometry import Hertz, ProfileSpanError, RoundedPunch, TabulatedProfile
 from .scene import Scene, load_scene, scene_error
+from .si import interval, quantity
 
 EXIT_INPUT_ERROR = 2
 """Exit status for bad input (the same status click uses for usage errors)."""
@@ -120,6 +121,18 @@ def usage_error_line(error: click.UsageError, args: list[str] = ()) -> str:
     return str(HalfslipInputError(f"{' '.join(message.split())} (see '{command} --help')", file=file, field=field))
 
 
+INPUT_FILE = click.Path(path_type=str)
+"""A file argument: shells complete file names (click.Path). Existence and kind are left to the
+readers, whose one-line errors name the file ("halfslip: dd: is a directory, not a scene file");
+click's own check (dir_okay=False) would say "scene_file: File 'dd' is a directory."."""
+
+OUTPUT_PATH = click.Path(path_type=str)
+"""An output path (a file, or a folder where a command takes one): checked by ``io.check_output``."""
+
+QUIET = click.option("--quiet", is_flag=True, help="Print nothing but errors and warnings.")
+"""The --quiet option of every command that prints."""
+
+
 class Seconds(click.ParamType):
     """A finite, positive number of seconds."""
 
@@ -144,15 +157,17 @@ def main() -> None:
 
 
 @main.command()
-@click.argument("scene_file", metavar="SCENE.yaml")
-def validate(scene_file: str) -> None:
+@click.argument("scene_file", metavar="SCENE.yaml", type=INPUT_FILE)
+@QUIET
+def validate(scene_file: str, quiet: bool) -> None:
     """Check a scene and print it resolved, with a summary of its load history.
 
     Warnings (|Q| > fP somewhere, loads that jump at the start of cycles) go
     to stderr; the exit status is 0 for a valid scene, 2 for bad input.
     """
     scene = load_scene(scene_file)
-    click.echo("\n".join(describe_scene(scene)))
+    if not quiet:
+        click.echo("\n".join(describe_scene(scene)))
     for message in scene.warnings():
         click.echo(f"halfslip: warning: {message}", err=True)
 
@@ -210,15 +225,15 @@ def describe_profile(profile: Any) -> str:
 
 
 @main.command()
-@click.argument("scene_file", metavar="SCENE.yaml")
-@click.option("-o", "--output", "output", metavar="OUT.h5", help="Result file (default: the scene name with .h5, here).")
+@click.argument("scene_file", metavar="SCENE.yaml", type=INPUT_FILE)
+@click.option("-o", "--output", "output", metavar="OUT.h5", type=OUTPUT_PATH, help="Result file (default: the scene name with .h5, here).")
 @click.option("--method", type=click.Choice(["auto", "exact", "general"]), help="Override solver.method.")
 @click.option("--nodes", type=click.IntRange(min=8), help="Override solver.nodes (general solver).")
 @click.option("--resume", is_flag=True, help="Continue the unfinished run in OUT.h5.")
 @click.option("--overwrite", is_flag=True, help="Replace OUT.h5 even when it is not a halfslip result.")
 @click.option("--checkpoint-every", type=Seconds(), default=2.0, show_default=True,
               help="Seconds between rewrites of OUT.h5 during the run (at least; > 0).")
-@click.option("--quiet", is_flag=True, help="Print nothing but errors.")
+@QUIET
 def run(scene_file: str, output: str | None, method: str | None, nodes: int | None, resume: bool,
         overwrite: bool, checkpoint_every: float, quiet: bool) -> None:
     """March a scene's load history and write the result dataset (HDF5).
@@ -388,8 +403,8 @@ def summarize(result, path) -> list[str]:
     ]
     last = result.isel(t=-1)
     lines.append(
-        f"  final contact [{float(last.contact_left):.6g}, {float(last.contact_right):.6g}] m, "
-        f"stick zone [{float(last.stick_left):.6g}, {float(last.stick_right):.6g}] m"
+        f"  final contact {interval(float(last.contact_left), float(last.contact_right), 'm')}, "
+        f"stick zone {interval(float(last.stick_left), float(last.stick_right), 'm')}"
     )
     try:
         table = post.cycles(result)
@@ -400,13 +415,13 @@ def summarize(result, path) -> list[str]:
         row = table.isel(cycle=-1)
         where = f"last full cycle, t = {float(row.t_start):g} .. {float(row.t_stop):g} s"
         if np.isfinite(float(zone["left"])):
-            lines.append(f"  permanent stick zone [{float(zone['left']):.6g}, {float(zone['right']):.6g}] m ({where})")
+            lines.append(f"  permanent stick zone {interval(float(zone['left']), float(zone['right']), 'm')} ({where})")
         else:
             lines.append(f"  permanent stick zone: none, no point sticks throughout the {where}")
         energy = post.dissipation_per_cycle(result)["dissipation"].values
-        first = f", first cycle {energy[0]:.6g} J/m" if energy.size > 1 else ""
-        lines.append(f"  dissipation per cycle {energy[-1]:.6g} J/m (last full cycle){first}")
-    lines.append(f"  dissipated {float(last.dissipation):.6g} J/m in total")
+        first = f", first cycle {quantity(energy[0], 'J/m')}" if energy.size > 1 else ""
+        lines.append(f"  dissipation per cycle {quantity(energy[-1], 'J/m')} (last full cycle){first}")
+    lines.append(f"  dissipated {quantity(float(last.dissipation), 'J/m')} in total")
     failed = int(result.attrs.get("count_failed_steps", 0))
     if failed and "converged" in result:
         bad = result["converged"].values == 0
@@ -424,12 +439,17 @@ def summarize(result, path) -> list[str]:
 
 
 @main.command()
-@click.argument("scene_file", metavar="SCENE.yaml")
+@click.argument("scene_file", metavar="SCENE.yaml", type=INPUT_FILE)
 @click.option("--segment", type=int, help="Index of the cycles segment (default: the last one).")
-@click.option("-o", "--output", "output", metavar="OUT.h5", help="Also write the steady-state dataset.")
+@click.option("-o", "--output", "output", metavar="OUT.h5", type=OUTPUT_PATH, help="Also write the steady-state dataset.")
 @click.option("--overwrite", is_flag=True, help="Replace OUT.h5 even when it is not a halfslip result.")
-def steady(scene_file: str, segment: int | None, output: str | None, overwrite: bool) -> None:
-    """Permanent stick zone of the cyclic part of a scene, found directly."""
+@QUIET
+def steady(scene_file: str, segment: int | None, output: str | None, overwrite: bool, quiet: bool) -> None:
+    """Permanent stick zone of the cyclic part of a scene, found directly.
+
+    Prints the zone, the regime and, with -o, the file written; a warning
+    (e.g. a tension range the closed form does not cover) goes to stderr.
+    """
     from contextlib import nullcontext
 
     from .io import OutputLock, check_output
@@ -438,10 +458,10 @@ def steady(scene_file: str, segment: int | None, output: str | None, overwrite: 
     scene = load_scene(scene_file)
     out = check_output(output, inputs=scene_inputs(scene), overwrite=overwrite) if output else None
     with OutputLock(out) if out is not None else nullcontext():
-        _steady(scene, segment, out, steady_state)
+        _steady(scene, segment, out, steady_state, quiet)
 
 
-def _steady(scene: Scene, segment: int | None, out, steady_state) -> None:
+def _steady(scene: Scene, segment: int | None, out, steady_state, quiet: bool = False) -> None:
     try:
         ds = steady_state(scene, segment)
     except ProfileSpanError as error:
@@ -454,28 +474,29 @@ def _steady(scene: Scene, segment: int | None, out, steady_state) -> None:
         ("scene", scene.name),
         ("method", ds.attrs["method"]),
         ("regime", names.get(regime, str(regime))),
-        ("permanent stick left [m]", f"{float(ds.permanent_stick_left):.6g}"),
-        ("permanent stick right [m]", f"{float(ds.permanent_stick_right):.6g}"),
+        ("permanent stick zone", interval(float(ds.permanent_stick_left), float(ds.permanent_stick_right), "m")),
     ]
     if "dissipation_per_cycle" in ds:
-        rows.append(("dissipation per cycle [J/m]", f"{float(ds.dissipation_per_cycle):.6g}"))
-        rows.append(("peak slip amplitude [m]", f"{float(ds.peak_slip_amplitude):.6g}"))
+        rows.append(("dissipation per cycle", quantity(float(ds.dissipation_per_cycle), "J/m")))
+        rows.append(("peak slip amplitude", quantity(float(ds.peak_slip_amplitude), "m")))
     width = max(len(k) for k, _ in rows)
-    for key, value in rows:
-        click.echo(f"{key:<{width}}  {value}")
-    click.echo(f"note: {ds.attrs['note']}")
+    if not quiet:
+        for key, value in rows:
+            click.echo(f"{key:<{width}}  {value}")
+        click.echo(f"note: {ds.attrs['note']}")
     if ds.attrs.get("warning"):
         click.echo(f"halfslip: warning: {ds.attrs['warning']}", err=True)
     if out is not None:
         from .io import write_result
 
         write_result(ds, out)
-        click.echo(f"written to {out}")
+        if not quiet:
+            click.echo(f"written to {out}")
 
 
 @main.command()
-@click.argument("result_file", metavar="OUT.h5")
-@click.option("-o", "--output", "output", metavar="FIG.png|FOLDER",
+@click.argument("result_file", metavar="OUT.h5", type=INPUT_FILE)
+@click.option("-o", "--output", "output", metavar="FIG.png|FOLDER", type=OUTPUT_PATH,
               help="A figure file (one kind, or several as FIG-<kind>.png) or a folder; "
                    "default: OUT-<kind>.png next to OUT.h5.")
 @click.option("--kind", "kinds", multiple=True,
@@ -485,15 +506,16 @@ def _steady(scene: Scene, segment: int | None, out, steady_state) -> None:
                    "tractions, slip, loop, stress, ruiz, loads; a sweep file: sweep; a steady file: steady.")
 @click.option("--at", "at", multiple=True, metavar="T",
               help="Time [s] of a tractions / stress snapshot (repeat, or separate with commas).")
-def plot(result_file: str, output: str | None, kinds: tuple, at: tuple) -> None:
+@QUIET
+def plot(result_file: str, output: str | None, kinds: tuple, at: tuple, quiet: bool) -> None:
     """Pictures of a halfslip file: a run, a sweep result or a steady-state file.
 
     The file's kind is read from its variables and attributes. A run gets
     the loading path, stick-slip map, tractions, slip and energy, Q-delta
     loop, surface stress, Ruiz parameters and loads; a sweep result its maps
-    (or curves) over the varied fields; a steady-state file (``halfslip
-    steady -o``) its permanent stick zone and slip amplitude. Prints the path
-    of every figure written. Bad input (missing file, not a halfslip file, a
+    (or curves) over the varied fields; a steady-state file (written by
+    halfslip steady -o) its permanent stick zone and slip amplitude. Prints
+    the path of every figure written. Bad input (missing file, not a halfslip file, a
     kind the file cannot give) exits 2 with one line.
     """
     from pathlib import Path
@@ -530,40 +552,41 @@ def plot(result_file: str, output: str | None, kinds: tuple, at: tuple) -> None:
             except ValueError:
                 raise HalfslipInputError(f"expected a time in seconds, got {part!r}", field="--at") from None
     chosen = list(kinds) if kinds else None
-    if chosen is None and kind == "run":
+    if chosen is None and kind == "run" and not quiet:
         for name in plots.KINDS:
             missing = [field for field in plots.NEEDS[name] if field not in ds.data_vars]
             if missing:
                 click.echo(f"halfslip: note: no {name} figure: the run did not store {', '.join(missing)}", err=True)
-    if not ds.attrs.get("complete", 1):
+    if not ds.attrs.get("complete", 1) and not quiet:
         click.echo(f"halfslip: note: the {kind} is unfinished; the figures show what is done", err=True)
     out = Path(output) if output else source.parent
     try:
         written = plots.write_figures(ds, out, kinds=chosen, at=times or None)
     except HalfslipInputError as error:
         raise error.located(result_file, None) from None
-    for path in written:
-        click.echo(str(path))
+    if not quiet:
+        for path in written:
+            click.echo(str(path))
 
 
 @main.command(name="sweep")
-@click.argument("sweep_file", metavar="SWEEP.yaml")
-@click.option("-o", "--output", "output", metavar="OUT.h5",
+@click.argument("sweep_file", metavar="SWEEP.yaml", type=INPUT_FILE)
+@click.option("-o", "--output", "output", metavar="OUT.h5", type=OUTPUT_PATH,
               help="Result file (default: the sweep file's name with .h5, here). Rerun with the same "
                    "file to finish an interrupted sweep.")
 @click.option("--workers", type=click.IntRange(min=1), metavar="N",
               help="Local worker processes (default: the number of cores; 1 runs in this process).")
 @click.option("--scheduler", metavar="ADDRESS", help="Run the cases on this dask.distributed scheduler.")
-@click.option("--cases-dir", "cases_dir", metavar="DIR", help="Also write each case's full result to DIR.")
+@click.option("--cases-dir", "cases_dir", metavar="DIR", type=click.Path(file_okay=False, path_type=str), help="Also write each case's full result to DIR.")
 @click.option("--overwrite", is_flag=True, help="Replace OUT.h5 even when it is not a halfslip result.")
-@click.option("--quiet", is_flag=True, help="Print nothing but errors.")
+@QUIET
 def sweep_command(sweep_file: str, output: str | None, workers: int | None, scheduler: str | None,
                   cases_dir: str | None, overwrite: bool, quiet: bool) -> None:
     """Run every case of a sweep file and write one dataset of per-case summaries.
 
     Ctrl-C or SIGTERM stops the sweep and writes the finished cases (exit
     status 130); the same command then runs only the cases not yet done.
-    Failing cases are recorded in the ``status`` variable and do not stop the
+    Failing cases are recorded in the status variable and do not stop the
     sweep.
     """
     import signal

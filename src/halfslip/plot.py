@@ -56,6 +56,7 @@ from matplotlib.ticker import MaxNLocator, ScalarFormatter
 
 from . import post
 from .errors import HalfslipInputError
+from .si import unit_scale  # noqa: F401  (public here since 0.1: every figure's axes use it)
 
 KINDS = ("trajectory", "map", "tractions", "slip", "loop", "stress", "ruiz", "loads")
 """Figure kinds of a run, in the order :func:`plot_run` writes them."""
@@ -86,44 +87,6 @@ SIZE = (7.5, 5.0)  # inches: 1125 x 750 px at DPI
 
 # ---------------------------------------------------------------------------
 # helpers
-
-
-_PREFIXES = ((1e9, "G"), (1e6, "M"), (1e3, "k"), (1.0, ""), (1e-3, "m"), (1e-6, "µ"), (1e-9, "n"), (1e-12, "p"))
-
-
-def unit_scale(values, unit: str) -> tuple[float, str]:
-    """Factor and unit label so that the largest magnitude of `values` reads 1 .. 1000.
-
-    Every figure scales its axes with this one helper: divide by the factor
-    and write the label, e.g. ``unit_scale([2e-4], "m") == (1e-3, "mm")``,
-    ``unit_scale([3e7], "Pa") == (1e6, "MPa")``. Forces per length read in
-    N/m or kN/m (never mN/m), energies per area J/m² with a prefix.
-
-    Parameters
-    ----------
-    values : array_like
-        The values to be drawn (NaN ignored).
-    unit : str
-        Their SI unit (``m``, ``Pa``, ``N/m``, ``N``, ``J/m``, ``J/m^2``, ``s``).
-
-    Returns
-    -------
-    (float, str)
-    """
-    values = np.asarray(values, float)
-    finite = np.abs(values[np.isfinite(values)])
-    top = float(finite.max()) if finite.size else 0.0
-    pretty = unit.replace("^2", "²")
-    if top == 0.0:
-        return 1.0, pretty
-    for factor, prefix in _PREFIXES:
-        if top >= factor * (1 - 1e-12):
-            break
-    if unit.startswith("N/") or unit == "N":  # kN/m, not mN/m; forces read in N or kN
-        factor, prefix = (1e3, "k") if top >= 1e3 else (1.0, "")
-    if unit == "s":  # times read in s (ms for short runs)
-        factor, prefix = (1e-3, "m") if top < 1.0 else (1.0, "")
-    return factor, f"{prefix}{pretty}"
 
 
 def _plain(ax: Axes) -> None:
