@@ -177,7 +177,9 @@ class Scene:
         :func:`scene_fingerprint` is the full form that identifies a scene.
         """
         history = self.history
-        return (f"Scene({self.name!r}, E={self.material.E:.4g} Pa, nu={self.material.nu:g}, "
+        from .si import quantity
+
+        return (f"Scene({self.name!r}, E={quantity(self.material.E, 'Pa')}, nu={self.material.nu:g}, "
                 f"friction={self.friction:g}, {_profile_repr(self.profile)}, "
                 f"{len(history.segments)} segments, {history.n_steps} steps, t = 0 .. {history.duration:g} s)")
 
@@ -208,10 +210,12 @@ class Scene:
 
 
 def _profile_repr(profile: Any) -> str:
+    from .si import quantity
+
     if isinstance(profile, geometry.Hertz):
-        return f"hertz R={profile.radius:.4g} m"
+        return f"hertz R={quantity(profile.radius, 'm')}"
     if isinstance(profile, geometry.RoundedPunch):
-        return f"rounded_punch w={profile.flat_half_width:.4g} m R={profile.radius:.4g} m"
+        return f"rounded_punch w={quantity(profile.flat_half_width, 'm')} R={quantity(profile.radius, 'm')}"
     if isinstance(profile, geometry.TabulatedProfile):
         return f"profile of {profile.x.size} samples"
     return type(profile).__name__
