@@ -29,7 +29,7 @@ def _script():
     return module
 
 
-@pytest.mark.parametrize("example", ["hertz_pad", "motor", "dovetail"])
+@pytest.mark.parametrize("example", ["hertz_pad", "motor", "dovetail", "tabulated"])
 def test_every_stored_number_is_quoted_in_the_guide(example):
     stored = STORED[example]
     missing = [line for line in stored["summary"] if line not in GUIDE]

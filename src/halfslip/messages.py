@@ -25,15 +25,21 @@ class Kind:
     value: str
     units: str
     worst: str  # "max" or "min": the worst record has the largest (smallest) value
+    label: str = "value"  # the value's name in a summary line
 
 
 KINDS = {
     kind.code: kind for kind in (
-        Kind("gross_sliding", "abs(Q)/(f P), the shear asked for over what friction carries", "1", "max"),
-        Kind("separated_shear", "abs(Q), the shear force not carried by a separated contact", "N/m", "max"),
-        Kind("slip_solve_kept_stick", "Coulomb excess of the full-stick answer kept, of f max p", "1", "max"),
-        Kind("slip_solve_closest", "violation of the closest slip-zone answer kept, x tolerance", "1", "max"),
-        Kind("slip_zone_resolution", "widest slip zone in lattice spacings (contact width / nodes)", "1", "min"),
+        Kind("gross_sliding", "abs(Q)/(f P), the shear asked for over what friction carries", "1", "max",
+             "abs(Q)/(f P)"),
+        Kind("separated_shear", "abs(Q), the shear force not carried by a separated contact", "N/m", "max",
+             "abs(Q) [N/m]"),
+        Kind("slip_solve_kept_stick", "Coulomb excess of the full-stick answer kept, of f max p", "1", "max",
+             "Coulomb excess"),
+        Kind("slip_solve_closest", "violation of the closest slip-zone answer kept, x tolerance", "1", "max",
+             "violation"),
+        Kind("slip_zone_resolution", "widest slip zone in lattice spacings (contact width / nodes)", "1", "min",
+             "spacings"),
         Kind("note", "none (NaN)", "1", "max"),
     )
 }
@@ -210,6 +216,6 @@ def summary(ds) -> list[str]:
         if len(rows) > 1 or int(count[first]) > 1:
             if not math.isnan(float(value[worst])):
                 where += (f", worst at step {step[worst]} (t = {t[worst]:.6g} s, "
-                          f"{KINDS.get(kind, KINDS['note']).value.split(',')[0]} = {float(value[worst]):.4g})")
+                          f"{KINDS.get(kind, KINDS['note']).label} = {float(value[worst]):.4g})")
         lines.append(f"{kind} x {int(count[first])}, {where}: {text[first]}")
     return lines
