@@ -40,6 +40,8 @@ class HalfslipGroup(click.Group):
         except HalfslipInputError as error:
             click.echo(f"halfslip: {error}", err=True)
             ctx.exit(EXIT_INPUT_ERROR)
+        except KeyboardInterrupt:  # click would print an empty line first: the one line is main's
+            raise click.Abort() from None
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
         """Click's main, with usage errors and interrupts in the one-line form."""
