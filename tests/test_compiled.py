@@ -46,7 +46,7 @@ def test_simulate_uses_the_kernel_for_extents_and_agrees_with_fields_run():
     extents = dataclasses.replace(scene, output=dataclasses.replace(scene.output, fields=()))
     a = hs.simulate(extents)
     b = hs.simulate(scene)  # fields stored: the Python step path
-    for name in ("stick_left", "stick_right", "contact_right", "dissipation", "shift", "regime"):
+    for name in ("stick_left", "stick_right", "contact_right", "dissipation", "rigid_shift", "regime"):
         np.testing.assert_array_equal(a[name].values, b[name].values)
     for k in ("count_steps", "count_slip_solves", "count_stick_steps", "count_normal_solves", "skipped_cycles"):
         assert a.attrs[k] == b.attrs[k], k

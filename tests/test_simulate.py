@@ -15,7 +15,7 @@ from halfslip.cli import main
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 INTERFACE_VARIABLES = [
     "P", "Q", "M", "sigma", "contact_left", "contact_right", "stick_left", "stick_right",
-    "regime", "shift", "dissipation", "p", "q", "slip",
+    "regime", "rigid_shift", "dissipation", "p", "q", "slip",
 ]
 
 

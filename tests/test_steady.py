@@ -104,7 +104,7 @@ def test_cycle_skipping_matches_full_marching():
     assert full.attrs["skipped_cycles"] == 0
     assert skipped.attrs["skipped_cycles"] >= 25
     assert skipped.attrs["count_steps"] < full.attrs["count_steps"] / 5
-    for name in ("t", "stick_left", "stick_right", "shift", "contact_right"):
+    for name in ("t", "stick_left", "stick_right", "rigid_shift", "contact_right"):
         assert float(skipped[name][-1]) == pytest.approx(float(full[name][-1]), rel=1e-12)
     assert float(skipped.dissipation[-1]) == pytest.approx(float(full.dissipation[-1]), rel=1e-12)
 

@@ -35,6 +35,7 @@ from halfslip.sweep import (
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 HERTZ = EXAMPLES / "hertz_pad.yaml"
 Q_PATH = "loads[1].cycles.Q.amplitude"
+Q_NAME = "Q_amplitude"  # its short name: the dimension of a result
 NUMBERS = ["permanent_stick_left", "permanent_stick_right", "peak_slip_amplitude", "dissipation_per_cycle", "regime"]
 SUMMARY = NUMBERS + ["status", "method", "done"]  # everything but run_time, which is a wall-clock time
 
@@ -85,11 +86,12 @@ def grid_serial(tmp_path_factory):
 def test_grid_has_one_dimension_per_path_and_the_values_of_direct_runs(grid_serial):
     path, ds = grid_serial
     assert is_sweep_result(ds)
-    assert ds["done"].dims == ("friction", Q_PATH)
-    assert ds.sizes == {"friction": 2, Q_PATH: 3}
+    assert ds["done"].dims == ("friction", Q_NAME)
+    assert ds.sizes == {"friction": 2, Q_NAME: 3}
     np.testing.assert_array_equal(ds["friction"], [0.3, 0.6])
-    np.testing.assert_array_equal(ds[Q_PATH], [1.0e4, 2.0e4, 4.0e4])
-    assert ds[Q_PATH].attrs["units"] == "N/m" and ds["friction"].attrs["units"] == "1"
+    np.testing.assert_array_equal(ds[Q_NAME], [1.0e4, 2.0e4, 4.0e4])
+    assert ds[Q_NAME].attrs["units"] == "N/m" and ds["friction"].attrs["units"] == "1"
+    assert ds[Q_NAME].attrs["path"] == Q_PATH and json.loads(ds.attrs["sweep_names"]) == ["friction", Q_NAME]
     for name in list(ds.data_vars) + list(ds.coords):
         assert {"units", "long_name"} <= set(ds[name].attrs), name
     assert set(SUMMARIES) == set(ds.data_vars)
@@ -97,14 +99,14 @@ def test_grid_has_one_dimension_per_path_and_the_values_of_direct_runs(grid_seri
     assert ds["done"].all() and (ds["status"] == "ok").all()
     for f in (0.3, 0.6):
         for q in (1.0e4, 2.0e4, 4.0e4):
-            case = ds.sel({"friction": f, Q_PATH: q})
+            case = ds.sel({"friction": f, Q_NAME: q})
             expected = direct(hertz_case(f, q))
             for name in NUMBERS:  # exact: the same deterministic computation
                 np.testing.assert_array_equal(case[name].values, expected[name], err_msg=f"{name} f={f} Q={q}")
             assert str(case["method"].values).startswith("steady: ")
     # 4.0e4 > 0.3 * 1.0e5: gross sliding, nothing sticks; the others slip partially
-    assert int(ds["regime"].sel({"friction": 0.3, Q_PATH: 4.0e4})) == 3
-    assert np.isnan(float(ds["permanent_stick_left"].sel({"friction": 0.3, Q_PATH: 4.0e4})))
+    assert int(ds["regime"].sel({"friction": 0.3, Q_NAME: 4.0e4})) == 3
+    assert np.isnan(float(ds["permanent_stick_left"].sel({"friction": 0.3, Q_NAME: 4.0e4})))
     assert int((ds["regime"] == 2).sum()) == 5
 
 
@@ -114,10 +116,10 @@ def test_explicit_cases_have_a_case_dimension_with_the_values_as_coordinates(tmp
     ds = hs.sweep(path, workers=1, progress=False)
     assert ds["done"].dims == ("case",) and ds.sizes["case"] == 3
     np.testing.assert_array_equal(ds["case"], [0, 1, 2])
-    assert ds["friction"].dims == ("case",) and ds[Q_PATH].dims == ("case",)
+    assert ds["friction"].dims == ("case",) and ds[Q_NAME].dims == ("case",)
     # cases that leave a path alone show the base scene's value there
     np.testing.assert_array_equal(ds["friction"], [0.5, 0.7, 0.6])
-    np.testing.assert_array_equal(ds[Q_PATH], [1.8e4, 3.0e4, 1.0e4])
+    np.testing.assert_array_equal(ds[Q_NAME], [1.8e4, 3.0e4, 1.0e4])
     for k, (f, q) in enumerate([(0.5, 1.8e4), (0.7, 3.0e4), (0.6, 1.0e4)]):
         expected = direct(hertz_case(f, q))
         for name in NUMBERS:  # exact
@@ -377,20 +379,30 @@ def test_an_output_holding_another_sweep_is_refused(tmp_path, cli):
         hs.sweep(one, output=tmp_path / "plain.h5", workers=1, progress=False)
 
 
-def test_the_progress_line_counts_cases_and_time_left():
+def test_the_progress_line_counts_cases_and_time_left(monkeypatch):
     import io
+
+    import tqdm.std
 
     from halfslip.sweep import _ProgressLine
 
+    clock = [100.0]
+    monkeypatch.setattr(tqdm.std, "time", lambda: clock[0])
     stream = io.StringIO()
     line = _ProgressLine(True, stream)
-    line.started -= 2.0  # two seconds in
-    line(3, 1, 10, 3)
+    line.start(10, 0)
+    for done in (1, 2, 3):
+        clock[0] += 2.0 / 3  # three cases in two seconds
+        line(done, 1, 10, done)
     line.close()
     text = stream.getvalue()
-    assert text.startswith("\r  cases 3/10, 1 failed, 1.5 cases/s, 5 s left") and text.endswith("\n")
+    last = text.rstrip("\n").split("\r")[-1]
+    assert "cases" in last and " 3/10 " in last and "1 failed" in last, last
+    assert "1.50case/s" in last and "<00:04" in last, last  # 7 cases left at 1.5 cases/s: 4.7 s
+    assert text.endswith("\n")
     quiet = io.StringIO()
     off = _ProgressLine(False, quiet)
+    off.start(10, 0)
     off(3, 1, 10, 3)
     off.close()
     assert quiet.getvalue() == ""
@@ -399,6 +411,11 @@ def test_the_progress_line_counts_cases_and_time_left():
 # -- bad sweep files -------------------------------------------------------------
 
 BAD = {
+    "reserved_name": ("vary:\n  regime: {path: friction, values: [0.3]}\n", 3, "vary.regime",
+                      "'regime' names a variable of the sweep result"),
+    "bad_name": ("vary:\n  2f: {path: friction, values: [0.3]}\n", 3, "vary.2f", "a name is a word"),
+    "named_unknown_path": ("vary:\n  f:\n    path: frcition\n    values: [0.3]\n", 4, "vary.f.path",
+                           "unknown key 'frcition'"),
     "unknown_path": ("vary:\n  frcition: [0.3, 0.6]\n", 3, "vary.frcition", "unknown key 'frcition'; did you mean 'friction'?"),
     "non_list_values": ("vary:\n  friction: 0.5\n", 3, "vary.friction", "expected a list of values"),
     "bad_linspace": ("vary:\n  friction: {linspace: [0.1, 0.5]}\n", 3, "vary.friction.linspace",
@@ -453,6 +470,22 @@ def test_an_invalid_base_scene_names_the_scene_file(cli, tmp_path):
     assert result.stderr.startswith(f"halfslip: {scene}:{line}: friction: must be >= 0")
 
 
+def test_sweep_axes_have_short_names_given_or_derived_and_keep_their_path(tmp_path):
+    """Dimensions are short names (xarray-friendly: ds.Q_amp.sel(...)); the scene path is an attribute."""
+    body = ("vary:\n  Q_amp:\n    path: loads[1].cycles.Q.amplitude\n    linspace: [1.0e4, 2.0e4, 2]\n"
+            "  geometry.radius: [0.05]\n")
+    spec = parse_sweep(f"scene: {HERTZ}\n{body}", path=tmp_path / "s.yaml")
+    assert spec.paths == (Q_PATH, "geometry.radius") and spec.names == ("Q_amp", "radius")
+    ds = hs.sweep(spec, workers=1, progress=False)
+    assert ds["done"].dims == ("Q_amp", "radius") and ds["Q_amp"].attrs["path"] == Q_PATH
+    assert float(ds.Q_amp.sel(Q_amp=2.0e4)) == 2.0e4 and (ds["status"] == "ok").all()
+    same = parse_sweep(f"scene: {HERTZ}\nvary:\n  Q_amp:\n    path: {Q_PATH}\n    values: [1.0e4, 2.0e4]\n"
+                       "  geometry.radius: [0.05]\n")
+    assert same.hash == spec.hash  # a name does not change what is computed: a result file continues
+    cases = parse_sweep(f"scene: {HERTZ}\ncases:\n  - {{friction: 0.5, solver.method: exact}}\n")
+    assert cases.names == ("friction", "solver_method")  # 'method' is a variable of the result
+
+
 def test_sweep_errors_carry_the_field_for_python_callers(tmp_path):
     with pytest.raises(HalfslipInputError) as caught:
         parse_sweep(f"scene: {HERTZ}\nvary:\n  friction: []\n", path="s.yaml")
@@ -471,7 +504,7 @@ def test_the_dovetail_example_maps_the_stick_zone(tmp_path):
     assert (ds["status"] == "ok").all() and (ds["method"] == "steady: SS1").all()
     width = ds["permanent_stick_right"] - ds["permanent_stick_left"]
     # a larger shear range leaves a smaller permanent stick zone, at every tension range
-    assert (width.diff(Q_PATH) < 0).all()
+    assert (width.diff(Q_NAME) < 0).all()
     assert (width > 0).all() and (ds["regime"] == 2).all()
     figure = plot_sweep(read_result(tmp_path / "dovetail.h5"), tmp_path / "map.png")
     assert (tmp_path / "map.png").stat().st_size > 10_000

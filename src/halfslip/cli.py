@@ -15,6 +15,7 @@ from ._version import __version__
 from .errors import HalfslipInputError, excerpt
 from .geometry import Hertz, ProfileSpanError, RoundedPunch, TabulatedProfile
 from .scene import Scene, load_scene, scene_error
+from .si import interval, quantity
 
 EXIT_INPUT_ERROR = 2
 """Exit status for bad input (the same status click uses for usage errors)."""
@@ -39,6 +40,8 @@ class HalfslipGroup(click.Group):
         except HalfslipInputError as error:
             click.echo(f"halfslip: {error}", err=True)
             ctx.exit(EXIT_INPUT_ERROR)
+        except KeyboardInterrupt:  # click would print an empty line first: the one line is main's
+            raise click.Abort() from None
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
         """Click's main, with usage errors and interrupts in the one-line form."""
@@ -120,6 +123,18 @@ def usage_error_line(error: click.UsageError, args: list[str] = ()) -> str:
     return str(HalfslipInputError(f"{' '.join(message.split())} (see '{command} --help')", file=file, field=field))
 
 
+INPUT_FILE = click.Path(path_type=str)
+"""A file argument: shells complete file names (click.Path). Existence and kind are left to the
+readers, whose one-line errors name the file ("halfslip: dd: is a directory, not a scene file");
+click's own check (dir_okay=False) would say "scene_file: File 'dd' is a directory."."""
+
+OUTPUT_PATH = click.Path(path_type=str)
+"""An output path (a file, or a folder where a command takes one): checked by ``io.check_output``."""
+
+QUIET = click.option("--quiet", is_flag=True, help="Print nothing but errors and warnings.")
+"""The --quiet option of every command that prints."""
+
+
 class Seconds(click.ParamType):
     """A finite, positive number of seconds."""
 
@@ -144,15 +159,17 @@ def main() -> None:
 
 
 @main.command()
-@click.argument("scene_file", metavar="SCENE.yaml")
-def validate(scene_file: str) -> None:
+@click.argument("scene_file", metavar="SCENE.yaml", type=INPUT_FILE)
+@QUIET
+def validate(scene_file: str, quiet: bool) -> None:
     """Check a scene and print it resolved, with a summary of its load history.
 
     Warnings (|Q| > fP somewhere, loads that jump at the start of cycles) go
     to stderr; the exit status is 0 for a valid scene, 2 for bad input.
     """
     scene = load_scene(scene_file)
-    click.echo("\n".join(describe_scene(scene)))
+    if not quiet:
+        click.echo("\n".join(describe_scene(scene)))
     for message in scene.warnings():
         click.echo(f"halfslip: warning: {message}", err=True)
 
@@ -209,45 +226,16 @@ def describe_profile(profile: Any) -> str:
     return repr(profile)
 
 
-class _Progress:
-    """Progress on a terminal, for runs longer than a second; silent otherwise."""
-
-    def __init__(self, enabled: bool):
-        import time
-
-        self._clock = time.perf_counter
-        self.enabled = enabled
-        self.started = self._clock()
-        self.last = self.started
-        self.shown = False
-
-    def __call__(self, i: int, n: int) -> None:
-        if not self.enabled:
-            return
-        now = self._clock()
-        if now - self.started < 1.0 or (now - self.last < 0.2 and i < n):
-            return
-        self.last = now
-        rate = i / (now - self.started)
-        left = (n - i) / rate if rate > 0 else float("nan")
-        click.echo(f"\r  step {i}/{n}  {100 * i / n:5.1f} %  {rate:,.0f} steps/s  {left:6.1f} s left ", nl=False, err=True)
-        self.shown = True
-
-    def close(self) -> None:
-        if self.shown:
-            click.echo("", err=True)
-
-
 @main.command()
-@click.argument("scene_file", metavar="SCENE.yaml")
-@click.option("-o", "--output", "output", metavar="OUT.h5", help="Result file (default: the scene name with .h5, here).")
+@click.argument("scene_file", metavar="SCENE.yaml", type=INPUT_FILE)
+@click.option("-o", "--output", "output", metavar="OUT.h5", type=OUTPUT_PATH, help="Result file (default: the scene name with .h5, here).")
 @click.option("--method", type=click.Choice(["auto", "exact", "general"]), help="Override solver.method.")
 @click.option("--nodes", type=click.IntRange(min=8), help="Override solver.nodes (general solver).")
 @click.option("--resume", is_flag=True, help="Continue the unfinished run in OUT.h5.")
 @click.option("--overwrite", is_flag=True, help="Replace OUT.h5 even when it is not a halfslip result.")
 @click.option("--checkpoint-every", type=Seconds(), default=2.0, show_default=True,
               help="Seconds between rewrites of OUT.h5 during the run (at least; > 0).")
-@click.option("--quiet", is_flag=True, help="Print nothing but errors.")
+@QUIET
 def run(scene_file: str, output: str | None, method: str | None, nodes: int | None, resume: bool,
         overwrite: bool, checkpoint_every: float, quiet: bool) -> None:
     """March a scene's load history and write the result dataset (HDF5).
@@ -268,6 +256,7 @@ def run(scene_file: str, output: str | None, method: str | None, nodes: int | No
     from pathlib import Path
 
     from .io import OutputLock, RunFileWriter, check_output
+    from .progress import Progress
     from .simulator import MethodError, simulate
 
     scene = load_scene(scene_file)
@@ -287,7 +276,7 @@ def run(scene_file: str, output: str | None, method: str | None, nodes: int | No
         # SIGINT ignored by whoever started us (a background job of a script) stays ignored
         handlers = {sig: signal.signal(sig, _request_stop) for sig in (signal.SIGINT, signal.SIGTERM)
                     if signal.getsignal(sig) is not signal.SIG_IGN}
-        progress = _Progress(enabled=not quiet and sys.stderr.isatty())
+        progress = Progress("step", scene.name, enabled=not quiet and sys.stderr.isatty(), delay=1.0)
         try:
             result = simulate(scene, method=method, nodes=nodes, progress=progress,
                               writer=RunFileWriter(out, min_interval=checkpoint_every), resume=previous_run,
@@ -336,8 +325,8 @@ def check_figure_output(target, source) -> None:
     """Refuse, before drawing, a figure path that is not a figure format or is the result itself."""
     from .io import _same_file
 
-    if target.is_dir() or str(target).endswith(("/", "\\")) or not target.suffix:
-        return  # a folder (made when missing): the figures get their own names
+    if target.is_dir() or not target.suffix or str(target).endswith(("/", "\\")):
+        return  # a folder, made by write_figures (plot.py: a path without an ending is a folder)
     suffix = target.suffix.lower().lstrip(".")
     if suffix not in FIGURE_FORMATS:
         raise HalfslipInputError(f"a figure is written as {', '.join(FIGURE_FORMATS)} (by its ending); "
@@ -395,11 +384,10 @@ def summarize(result, path) -> list[str]:
     :mod:`halfslip.post`; a line that cannot be derived (e.g. an interrupted
     run without a full cycle) is left out.
     """
-    import re
-
     import numpy as np
 
     from . import post
+    from .messages import summary as message_summary
     from .state import Regime
 
     regime = result["regime"].values[1:] if result.sizes["t"] > 1 else result["regime"].values
@@ -419,8 +407,8 @@ def summarize(result, path) -> list[str]:
     ]
     last = result.isel(t=-1)
     lines.append(
-        f"  final contact [{float(last.contact_left):.6g}, {float(last.contact_right):.6g}] m, "
-        f"stick zone [{float(last.stick_left):.6g}, {float(last.stick_right):.6g}] m"
+        f"  final contact {interval(float(last.contact_left), float(last.contact_right), 'm')}, "
+        f"stick zone {interval(float(last.stick_left), float(last.stick_right), 'm')}"
     )
     try:
         table = post.cycles(result)
@@ -431,13 +419,13 @@ def summarize(result, path) -> list[str]:
         row = table.isel(cycle=-1)
         where = f"last full cycle, t = {float(row.t_start):g} .. {float(row.t_stop):g} s"
         if np.isfinite(float(zone["left"])):
-            lines.append(f"  permanent stick zone [{float(zone['left']):.6g}, {float(zone['right']):.6g}] m ({where})")
+            lines.append(f"  permanent stick zone {interval(float(zone['left']), float(zone['right']), 'm')} ({where})")
         else:
             lines.append(f"  permanent stick zone: none, no point sticks throughout the {where}")
         energy = post.dissipation_per_cycle(result)["dissipation"].values
-        first = f", first cycle {energy[0]:.6g} J/m" if energy.size > 1 else ""
-        lines.append(f"  dissipation per cycle {energy[-1]:.6g} J/m (last full cycle){first}")
-    lines.append(f"  dissipated {float(last.dissipation):.6g} J/m in total")
+        first = f", first cycle {quantity(energy[0], 'J/m')}" if energy.size > 1 else ""
+        lines.append(f"  dissipation per cycle {quantity(energy[-1], 'J/m')} (last full cycle){first}")
+    lines.append(f"  dissipated {quantity(float(last.dissipation), 'J/m')} in total")
     failed = int(result.attrs.get("count_failed_steps", 0))
     if failed and "converged" in result:
         bad = result["converged"].values == 0
@@ -447,24 +435,25 @@ def summarize(result, path) -> list[str]:
                      f"(first at t = {t_bad[0]:.6g} s, worst at t = {t_bad[worst]:.6g} s, residual "
                      f"{residual[worst]:.3g} x tolerance); their results are the closest found "
                      "(variables converged, residual)")
-    # one note per kind of solver message (messages differing only in numbers are one kind)
-    groups: dict[str, list[str]] = {}
-    for message in filter(None, str(result.attrs.get("messages", "")).split("\n")):
-        groups.setdefault(re.sub(r"[-+]?\d[\d.]*(?:e[-+]?\d+)?", "#", message), []).append(message)
-    for similar in groups.values():
-        more = f" (and {len(similar) - 1} more like it)" if len(similar) > 1 else ""
-        lines.append(f"  note: {similar[0]}{more}")
+    # one note per kind of solver message: how many, the first and the worst step (halfslip.messages)
+    for line in message_summary(result):
+        lines.append(f"  note: {line}")
     lines.append(f"  written to {path}")
     return lines
 
 
 @main.command()
-@click.argument("scene_file", metavar="SCENE.yaml")
+@click.argument("scene_file", metavar="SCENE.yaml", type=INPUT_FILE)
 @click.option("--segment", type=int, help="Index of the cycles segment (default: the last one).")
-@click.option("-o", "--output", "output", metavar="OUT.h5", help="Also write the steady-state dataset.")
+@click.option("-o", "--output", "output", metavar="OUT.h5", type=OUTPUT_PATH, help="Also write the steady-state dataset.")
 @click.option("--overwrite", is_flag=True, help="Replace OUT.h5 even when it is not a halfslip result.")
-def steady(scene_file: str, segment: int | None, output: str | None, overwrite: bool) -> None:
-    """Permanent stick zone of the cyclic part of a scene, found directly."""
+@QUIET
+def steady(scene_file: str, segment: int | None, output: str | None, overwrite: bool, quiet: bool) -> None:
+    """Permanent stick zone of the cyclic part of a scene, found directly.
+
+    Prints the zone, the regime and, with -o, the file written; a warning
+    (e.g. a tension range the closed form does not cover) goes to stderr.
+    """
     from contextlib import nullcontext
 
     from .io import OutputLock, check_output
@@ -473,10 +462,10 @@ def steady(scene_file: str, segment: int | None, output: str | None, overwrite: 
     scene = load_scene(scene_file)
     out = check_output(output, inputs=scene_inputs(scene), overwrite=overwrite) if output else None
     with OutputLock(out) if out is not None else nullcontext():
-        _steady(scene, segment, out, steady_state)
+        _steady(scene, segment, out, steady_state, quiet)
 
 
-def _steady(scene: Scene, segment: int | None, out, steady_state) -> None:
+def _steady(scene: Scene, segment: int | None, out, steady_state, quiet: bool = False) -> None:
     try:
         ds = steady_state(scene, segment)
     except ProfileSpanError as error:
@@ -489,26 +478,29 @@ def _steady(scene: Scene, segment: int | None, out, steady_state) -> None:
         ("scene", scene.name),
         ("method", ds.attrs["method"]),
         ("regime", names.get(regime, str(regime))),
-        ("permanent stick left [m]", f"{float(ds.permanent_stick_left):.6g}"),
-        ("permanent stick right [m]", f"{float(ds.permanent_stick_right):.6g}"),
+        ("permanent stick zone", interval(float(ds.permanent_stick_left), float(ds.permanent_stick_right), "m")),
     ]
     if "dissipation_per_cycle" in ds:
-        rows.append(("dissipation per cycle [J/m]", f"{float(ds.dissipation_per_cycle):.6g}"))
-        rows.append(("peak slip amplitude [m]", f"{float(ds.peak_slip_amplitude):.6g}"))
+        rows.append(("dissipation per cycle", quantity(float(ds.dissipation_per_cycle), "J/m")))
+        rows.append(("peak slip amplitude", quantity(float(ds.peak_slip_amplitude), "m")))
     width = max(len(k) for k, _ in rows)
-    for key, value in rows:
-        click.echo(f"{key:<{width}}  {value}")
-    click.echo(f"note: {ds.attrs['note']}")
+    if not quiet:
+        for key, value in rows:
+            click.echo(f"{key:<{width}}  {value}")
+        click.echo(f"note: {ds.attrs['note']}")
+    if ds.attrs.get("warning"):
+        click.echo(f"halfslip: warning: {ds.attrs['warning']}", err=True)
     if out is not None:
         from .io import write_result
 
         write_result(ds, out)
-        click.echo(f"written to {out}")
+        if not quiet:
+            click.echo(f"written to {out}")
 
 
 @main.command()
-@click.argument("result_file", metavar="OUT.h5")
-@click.option("-o", "--output", "output", metavar="FIG.png|FOLDER",
+@click.argument("result_file", metavar="OUT.h5", type=INPUT_FILE)
+@click.option("-o", "--output", "output", metavar="FIG.png|FOLDER", type=OUTPUT_PATH,
               help="A figure file (one kind, or several as FIG-<kind>.png) or a folder; "
                    "default: OUT-<kind>.png next to OUT.h5.")
 @click.option("--kind", "kinds", multiple=True,
@@ -518,15 +510,16 @@ def _steady(scene: Scene, segment: int | None, out, steady_state) -> None:
                    "tractions, slip, loop, stress, ruiz, loads; a sweep file: sweep; a steady file: steady.")
 @click.option("--at", "at", multiple=True, metavar="T",
               help="Time [s] of a tractions / stress snapshot (repeat, or separate with commas).")
-def plot(result_file: str, output: str | None, kinds: tuple, at: tuple) -> None:
+@QUIET
+def plot(result_file: str, output: str | None, kinds: tuple, at: tuple, quiet: bool) -> None:
     """Pictures of a halfslip file: a run, a sweep result or a steady-state file.
 
     The file's kind is read from its variables and attributes. A run gets
     the loading path, stick-slip map, tractions, slip and energy, Q-delta
     loop, surface stress, Ruiz parameters and loads; a sweep result its maps
-    (or curves) over the varied fields; a steady-state file (``halfslip
-    steady -o``) its permanent stick zone and slip amplitude. Prints the path
-    of every figure written. Bad input (missing file, not a halfslip file, a
+    (or curves) over the varied fields; a steady-state file (written by
+    halfslip steady -o) its permanent stick zone and slip amplitude. Prints
+    the path of every figure written. Bad input (missing file, not a halfslip file, a
     kind the file cannot give) exits 2 with one line.
     """
     from pathlib import Path
@@ -563,40 +556,41 @@ def plot(result_file: str, output: str | None, kinds: tuple, at: tuple) -> None:
             except ValueError:
                 raise HalfslipInputError(f"expected a time in seconds, got {part!r}", field="--at") from None
     chosen = list(kinds) if kinds else None
-    if chosen is None and kind == "run":
+    if chosen is None and kind == "run" and not quiet:
         for name in plots.KINDS:
             missing = [field for field in plots.NEEDS[name] if field not in ds.data_vars]
             if missing:
                 click.echo(f"halfslip: note: no {name} figure: the run did not store {', '.join(missing)}", err=True)
-    if not ds.attrs.get("complete", 1):
+    if not ds.attrs.get("complete", 1) and not quiet:
         click.echo(f"halfslip: note: the {kind} is unfinished; the figures show what is done", err=True)
     out = Path(output) if output else source.parent
     try:
         written = plots.write_figures(ds, out, kinds=chosen, at=times or None)
     except HalfslipInputError as error:
         raise error.located(result_file, None) from None
-    for path in written:
-        click.echo(str(path))
+    if not quiet:
+        for path in written:
+            click.echo(str(path))
 
 
 @main.command(name="sweep")
-@click.argument("sweep_file", metavar="SWEEP.yaml")
-@click.option("-o", "--output", "output", metavar="OUT.h5",
+@click.argument("sweep_file", metavar="SWEEP.yaml", type=INPUT_FILE)
+@click.option("-o", "--output", "output", metavar="OUT.h5", type=OUTPUT_PATH,
               help="Result file (default: the sweep file's name with .h5, here). Rerun with the same "
                    "file to finish an interrupted sweep.")
 @click.option("--workers", type=click.IntRange(min=1), metavar="N",
               help="Local worker processes (default: the number of cores; 1 runs in this process).")
 @click.option("--scheduler", metavar="ADDRESS", help="Run the cases on this dask.distributed scheduler.")
-@click.option("--cases-dir", "cases_dir", metavar="DIR", help="Also write each case's full result to DIR.")
+@click.option("--cases-dir", "cases_dir", metavar="DIR", type=click.Path(file_okay=False, path_type=str), help="Also write each case's full result to DIR.")
 @click.option("--overwrite", is_flag=True, help="Replace OUT.h5 even when it is not a halfslip result.")
-@click.option("--quiet", is_flag=True, help="Print nothing but errors.")
+@QUIET
 def sweep_command(sweep_file: str, output: str | None, workers: int | None, scheduler: str | None,
                   cases_dir: str | None, overwrite: bool, quiet: bool) -> None:
     """Run every case of a sweep file and write one dataset of per-case summaries.
 
     Ctrl-C or SIGTERM stops the sweep and writes the finished cases (exit
     status 130); the same command then runs only the cases not yet done.
-    Failing cases are recorded in the ``status`` variable and do not stop the
+    Failing cases are recorded in the status variable and do not stop the
     sweep.
     """
     import signal

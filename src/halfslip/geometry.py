@@ -63,6 +63,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import CubicSpline
 
+from .errors import HalfslipInputError, check_number
+
 __all__ = ["Material", "Profile", "Hertz", "RoundedPunch", "TabulatedProfile", "NormalSolution", "NormalProblem"]
 
 _MAX_NEWTON_ITER = 60  # caps of the nonlinear iterations, which converge in far fewer
@@ -85,10 +87,31 @@ class ProfileSpanError(ValueError):
 
 @dataclass(frozen=True)
 class Material:
-    """Elastically similar bodies in plane strain."""
+    """Elastically similar bodies in plane strain.
+
+    Parameters
+    ----------
+    E : float
+        Young's modulus [Pa], > 0.
+    nu : float
+        Poisson's ratio, -1 < nu < 0.5.
+
+    Raises
+    ------
+    HalfslipInputError
+        For anything else, naming the field (``material.E``, ``material.nu``)
+        as a scene file's error does: the same checks as the YAML reader.
+    """
 
     E: float
     nu: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "E", check_number(self.E, "material.E", positive=True))
+        nu = check_number(self.nu, "material.nu")
+        if not -1.0 < nu < 0.5:
+            raise HalfslipInputError(f"Poisson's ratio must lie in (-1, 0.5), got {nu:g}", field="material.nu")
+        object.__setattr__(self, "nu", nu)
 
     @property
     def compliance(self) -> float:
@@ -197,7 +220,7 @@ class Hertz(Profile):
     radius: float
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "radius", _require_positive("radius", self.radius))
+        object.__setattr__(self, "radius", check_number(self.radius, "geometry.radius", positive=True))
 
     @property
     def symmetric(self) -> bool:
@@ -234,11 +257,9 @@ class RoundedPunch(Profile):
     radius: float
 
     def __post_init__(self) -> None:
-        w = float(self.flat_half_width)
-        if not math.isfinite(w) or w < 0.0:
-            raise ValueError(f"flat_half_width must be finite and >= 0, got {w!r}")
+        w = check_number(self.flat_half_width, "geometry.flat_half_width", nonnegative=True)
         object.__setattr__(self, "flat_half_width", w)
-        object.__setattr__(self, "radius", _require_positive("radius", self.radius))
+        object.__setattr__(self, "radius", check_number(self.radius, "geometry.radius", positive=True))
 
     @property
     def symmetric(self) -> bool:

@@ -132,7 +132,17 @@ def read_result(path: str | os.PathLike) -> xr.Dataset:
     """
     check_result_file(path)
     with xr.open_dataset(path, engine=ENGINE) as ds:
-        return ds.load()
+        return upgrade_result(ds.load())
+
+
+def upgrade_result(ds: xr.Dataset) -> xr.Dataset:
+    """A result written by an older halfslip, with today's names.
+
+    ``shift`` (hidden by ``Dataset.shift``) is ``rigid_shift`` since 0.2.
+    """
+    if "shift" in ds.data_vars and "rigid_shift" not in ds.variables and ds["shift"].dims == ("t",):
+        ds = ds.rename_vars(shift="rigid_shift")
+    return ds
 
 
 #: Caps on a result file read back (``--resume``, ``plot``, a sweep continued). A run stores at
@@ -468,6 +478,9 @@ def _check_size(description) -> None:
 
 _TEMP_SUFFIX = ".partial"
 
+CONVENTIONS = "CF-1.10"
+"""The ``Conventions`` attribute of every file halfslip writes."""
+
 
 def _encode(ds: xr.Dataset, checkpoint=None) -> bytes:
     import io as _io
@@ -475,6 +488,10 @@ def _encode(ds: xr.Dataset, checkpoint=None) -> bytes:
     import h5py
 
     encoding = {k: {"zlib": True, "complevel": 1} for k in ds.data_vars if ds[k].ndim == 2}
+    # CF: coordinates have no missing values, so no _FillValue (xarray adds NaN to floats otherwise)
+    encoding.update({k: {"_FillValue": None} for k in ds.coords})
+    if "Conventions" not in ds.attrs:
+        ds = ds.assign_attrs(Conventions=CONVENTIONS)
     image = _io.BytesIO(bytes(ds.to_netcdf(engine=ENGINE, encoding=encoding)))
     if checkpoint is not None:
         with h5py.File(image, "a") as f:

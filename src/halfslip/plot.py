@@ -56,6 +56,7 @@ from matplotlib.ticker import MaxNLocator, ScalarFormatter
 
 from . import post
 from .errors import HalfslipInputError
+from .si import unit_scale  # noqa: F401  (public here since 0.1: every figure's axes use it)
 
 KINDS = ("trajectory", "map", "tractions", "slip", "loop", "stress", "ruiz", "loads")
 """Figure kinds of a run, in the order :func:`plot_run` writes them."""
@@ -86,44 +87,6 @@ SIZE = (7.5, 5.0)  # inches: 1125 x 750 px at DPI
 
 # ---------------------------------------------------------------------------
 # helpers
-
-
-_PREFIXES = ((1e9, "G"), (1e6, "M"), (1e3, "k"), (1.0, ""), (1e-3, "m"), (1e-6, "µ"), (1e-9, "n"), (1e-12, "p"))
-
-
-def unit_scale(values, unit: str) -> tuple[float, str]:
-    """Factor and unit label so that the largest magnitude of `values` reads 1 .. 1000.
-
-    Every figure scales its axes with this one helper: divide by the factor
-    and write the label, e.g. ``unit_scale([2e-4], "m") == (1e-3, "mm")``,
-    ``unit_scale([3e7], "Pa") == (1e6, "MPa")``. Forces per length read in
-    N/m or kN/m (never mN/m), energies per area J/m² with a prefix.
-
-    Parameters
-    ----------
-    values : array_like
-        The values to be drawn (NaN ignored).
-    unit : str
-        Their SI unit (``m``, ``Pa``, ``N/m``, ``N``, ``J/m``, ``J/m^2``, ``s``).
-
-    Returns
-    -------
-    (float, str)
-    """
-    values = np.asarray(values, float)
-    finite = np.abs(values[np.isfinite(values)])
-    top = float(finite.max()) if finite.size else 0.0
-    pretty = unit.replace("^2", "²")
-    if top == 0.0:
-        return 1.0, pretty
-    for factor, prefix in _PREFIXES:
-        if top >= factor * (1 - 1e-12):
-            break
-    if unit.startswith("N/") or unit == "N":  # kN/m, not mN/m; forces read in N or kN
-        factor, prefix = (1e3, "k") if top >= 1e3 else (1.0, "")
-    if unit == "s":  # times read in s (ms for short runs)
-        factor, prefix = (1e-3, "m") if top < 1.0 else (1.0, "")
-    return factor, f"{prefix}{pretty}"
 
 
 def _plain(ax: Axes) -> None:
@@ -745,7 +708,7 @@ def _loop_data(ds: xr.Dataset):
                   for c, a, b in zip(table["cycle"].values, table["t_start"].values, table["t_stop"].values)]
         return (loops["Q"].values, loops["shift_slip"].values, loops["compliance"].values, labels,
                 loops["work"].values, energy["dissipation"].values)
-    Q, shift = ds["Q"].values, ds["shift"].values
+    Q, shift = ds["Q"].values, ds["rigid_shift"].values
     C = post.elastic_compliance(Q, shift, ds["regime"].values)
     return Q[None], (shift - C * Q)[None], np.array([C]), ["whole run (no cycles)"], None, None
 
@@ -770,7 +733,7 @@ def loop(ds: xr.Dataset, ax=None) -> Figure:
     Parameters
     ----------
     ds : xarray.Dataset
-        A run (loads and ``shift``). Without cycles the whole run's path is drawn.
+        A run (loads and ``rigid_shift``). Without cycles the whole run's path is drawn.
     ax : matplotlib Axes, Figure or SubFigure, optional
         Where to draw (default: a new figure).
 
@@ -779,8 +742,8 @@ def loop(ds: xr.Dataset, ax=None) -> Figure:
     matplotlib.figure.Figure
     """
     post.check_result(ds)
-    if "shift" not in ds.data_vars:
-        raise HalfslipInputError("the loop figure needs the variable shift, which this result lacks")
+    if "rigid_shift" not in ds.data_vars:
+        raise HalfslipInputError("the loop figure needs the variable rigid_shift, which this result lacks")
     fig, ax = _one_axes(ax, (9.0, 5.0))
     Q, slip_shift, compliance, labels, work, dissipation = _loop_data(ds)
     kQ, uQ = unit_scale(Q, "N/m")

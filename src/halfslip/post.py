@@ -571,13 +571,13 @@ def hysteresis_loops(ds: xr.Dataset, period: float | None = None) -> xr.Dataset:
     t_eff = timeline(ds, strict=False).t_eff
     data = {}
     for name in ("Q", "shift", "P", "t"):
-        values = t_eff if name == "t" else ds[name].values
+        values = t_eff if name == "t" else ds[_variable(ds, name)].values
         block = np.full((len(i0), length), np.nan)
         for row, (a, b) in enumerate(zip(i0, i1)):
             block[row, : b - a + 1] = values[a : b + 1]
         data[name] = block
     loops = xr.Dataset(
-        {name: (("cycle", "step"), block, dict(ds[name].attrs)) for name, block in data.items()},
+        {name: (("cycle", "step"), block, dict(ds[_variable(ds, name)].attrs)) for name, block in data.items()},
         coords={"cycle": table["cycle"], "step": ("step", np.arange(length), _attrs("1", "stored step within the cycle"))},
         attrs={"source": table.attrs["source"], "shift_datum": ds.attrs.get("shift_datum", np.nan)},
     )
@@ -592,6 +592,11 @@ def hysteresis_loops(ds: xr.Dataset, period: float | None = None) -> xr.Dataset:
     loops["shift_slip"] = (("cycle", "step"), data["shift"] - compliance[:, None] * data["Q"],
                            _attrs("m", "shift less its elastic part C Q"))
     return loops
+
+
+def _variable(ds: xr.Dataset, name: str) -> str:
+    """The result variable holding `name`: ``shift`` is stored as ``rigid_shift`` since 0.2."""
+    return "rigid_shift" if name == "shift" and "rigid_shift" in ds.variables else name
 
 
 def elastic_compliance(Q: np.ndarray, shift: np.ndarray, regime: np.ndarray | None = None) -> float:

@@ -159,7 +159,29 @@ class Scene:
             raise HalfslipInputError(f"Poisson's ratio must lie in (-1, 0.5), got {nu:g}", field="material.nu")
         object.__setattr__(self, "material", geometry.Material(E=E, nu=nu))
         object.__setattr__(self, "friction", check_number(self.friction, "friction", nonnegative=True))
+        if not isinstance(self.profile, geometry.Profile):
+            raise HalfslipInputError(f"expected a geometry profile (Hertz, RoundedPunch, TabulatedProfile), got "
+                                     f"{type(self.profile).__name__}", field="geometry")
+        if not isinstance(self.history, LoadHistory):
+            raise HalfslipInputError(f"expected a LoadHistory, got {type(self.history).__name__}", field="loads")
+        for name, kind in (("solver", SolverOptions), ("output", OutputOptions)):
+            if not isinstance(getattr(self, name), kind):
+                raise HalfslipInputError(f"expected {kind.__name__}, got {type(getattr(self, name)).__name__}",
+                                         field=name)
         check_run_bytes(self)
+
+    def __repr__(self) -> str:
+        """A short description: name, material, friction, geometry, segments and steps.
+
+        The scene text is not repeated (``scene.text`` holds it);
+        :func:`scene_fingerprint` is the full form that identifies a scene.
+        """
+        history = self.history
+        from .si import quantity
+
+        return (f"Scene({self.name!r}, E={quantity(self.material.E, 'Pa')}, nu={self.material.nu:g}, "
+                f"friction={self.friction:g}, {_profile_repr(self.profile)}, "
+                f"{len(history.segments)} segments, {history.n_steps} steps, t = 0 .. {history.duration:g} s)")
 
     def warnings(self) -> tuple[str, ...]:
         """Return messages about legal but physically suspect input.
@@ -185,6 +207,28 @@ class Scene:
                 f"(max |Q|/(fP) = {self.history.max_shear_ratio(self.friction):.3g}): gross sliding"
             )
         return tuple(messages)
+
+
+def _profile_repr(profile: Any) -> str:
+    from .si import quantity
+
+    if isinstance(profile, geometry.Hertz):
+        return f"hertz R={quantity(profile.radius, 'm')}"
+    if isinstance(profile, geometry.RoundedPunch):
+        return f"rounded_punch w={quantity(profile.flat_half_width, 'm')} R={quantity(profile.radius, 'm')}"
+    if isinstance(profile, geometry.TabulatedProfile):
+        return f"profile of {profile.x.size} samples"
+    return type(profile).__name__
+
+
+def scene_fingerprint(scene: Scene) -> str:
+    """Every field of `scene` as text (the dataclass form, before ``repr`` was made short).
+
+    What identifies a scene built in Python (``simulator.scene_hash``).
+    """
+    from dataclasses import fields
+
+    return f"Scene({', '.join(f'{f.name}={getattr(scene, f.name)!r}' for f in fields(scene))})"
 
 
 def run_bytes(scene: Scene, method: str | None = None) -> dict[str, int]:

@@ -16,6 +16,8 @@ import numpy as np
 import xarray as xr
 
 from .geometry import NormalProblem
+from .messages import MessageLog, checkpoint_problem
+from .progress import progress_for
 from .scene import check_run_bytes
 from .solvers.base import STATION_STATES
 from .state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime
@@ -139,7 +141,7 @@ class _Records:
     """
 
     names = ("t", "P", "Q", "M", "sigma", "contact_left", "contact_right",
-             "stick_left", "stick_right", "regime", "shift", "dissipation", "converged", "residual",
+             "stick_left", "stick_right", "regime", "rigid_shift", "dissipation", "converged", "residual",
              "stick_intervals")
 
     def __init__(self):
@@ -164,7 +166,7 @@ class _Records:
         c["stick_left"].append(state.stick_left)
         c["stick_right"].append(state.stick_right)
         c["regime"].append(int(regime))
-        c["shift"].append(state.shift)
+        c["rigid_shift"].append(state.shift)
         c["dissipation"].append(state.dissipation)
         c["converged"].append(int(converged))
         c["residual"].append(residual)
@@ -202,7 +204,7 @@ def simulate(
     *,
     method: str | None = None,
     nodes: int | None = None,
-    progress: Callable[[int, int], None] | None = None,
+    progress: bool | Callable[[int, int], None] | None = None,
     writer=None,
     resume=None,
     stop_requested: Callable[[], bool] | None = None,
@@ -216,8 +218,12 @@ def simulate(
         Overrides ``scene.solver.method``.
     nodes : int, optional
         Overrides ``scene.solver.nodes`` (general solver resolution).
-    progress : callable(i, n), optional
-        Called after each step with the step index and the number of steps.
+    progress : bool, callable(i, n) or progress.Progress, optional
+        True shows a progress bar (on a terminal or in a notebook,
+        :mod:`halfslip.progress`): its total drops when steady cycles are
+        skipped, and its time left follows the recent rate. A callable is
+        called after each step (or skip) with the step index reached and the
+        number of steps.
     writer : io.RunFileWriter, optional
         Receives the partial result and a checkpoint whenever it is due, and the
         final result; a killed process loses at most what came after the last write.
@@ -246,16 +252,20 @@ def simulate(
     h = scene.history
     n = h.n_steps
     started = time.perf_counter()
+    bar = progress_for(progress, "step", scene.name)
+    skipped = run.skipped_steps()
+    bar.start(n - skipped, run.i - skipped)
     try:
         while run.i < n:
             if stop_requested is not None and stop_requested():
                 raise KeyboardInterrupt
+            before = run.i
             if resume is not None and run.i == int(resume[1]["i"]):
                 _first_step_after_resume(run)
             else:
                 run.advance()
-            if progress is not None:
-                progress(run.i, n)
+            skipped, newly = run.skipped_steps(), run.skipped_steps() - skipped
+            bar.advance(run.i - before - newly, newly)
             if writer is not None and writer.due():
                 writer.write(run.dataset(complete=0, elapsed=time.perf_counter() - started), run.checkpoint(
                     time.perf_counter() - started))
@@ -264,6 +274,8 @@ def simulate(
         if writer is not None:
             writer.write(ds, run.checkpoint(time.perf_counter() - started))
         return ds
+    finally:
+        bar.close()
     ds = run.dataset(complete=1, elapsed=time.perf_counter() - started)
     _add_permanent_stick(ds)
     if writer is not None:
@@ -308,7 +320,9 @@ def scene_hash(scene) -> str:
     """SHA-256 of the scene text (of its repr for a scene built in Python)."""
     import hashlib
 
-    text = scene.text if scene.text is not None else repr(scene)
+    from .scene import scene_fingerprint
+
+    text = scene.text if scene.text is not None else scene_fingerprint(scene)
     return hashlib.sha256(text.encode()).hexdigest()
 
 
@@ -332,12 +346,16 @@ class _Run:
         self.state = self.solver.initial_state(float(h.t[0]))
         self.rec = _Records()
         self.counters = {"steps": 0, "stick_steps": 0, "slip_solves": 0, "normal_solves": 0, "failed_steps": 0}
-        self.messages: list[str] = []
+        self.log = MessageLog()
         self.skipper = CycleSkipper(h, self.solver) if scene.solver.skip_steady_cycles else None
         self.elapsed_before = 0.0
         # compiled marching of many steps at once where the solver offers it (extents only)
         self.chunked = not fields and self.solver.can_march
         self._store(Regime.SEPARATED)
+
+    def skipped_steps(self) -> int:
+        """Steps of the history skipped so far as repeats of a steady cycle."""
+        return 0 if self.skipper is None else self.skipper.skipped_steps
 
     def _store(self, regime: Regime, converged: bool = True, residual: float = 0.0) -> None:
         self.rec.add(self.state, regime, converged, residual, self.solver.stick_intervals(self.state))
@@ -360,8 +378,8 @@ class _Run:
         c["stick_steps"] += report.regime == Regime.STICK
         c["normal_solves"] += report.normal_solved
         c["failed_steps"] += not report.converged
-        if report.message and report.message not in self.messages:
-            self.messages.append(report.message)
+        if report.message:
+            self.log.add_text(i, float(h.t[i]), report.message, {"gross_sliding": _shear_ratio(loads1, self.scene.friction)})
         jumped = False
         if self.skipper is not None:
             self.skipper.observe(i, state)
@@ -390,13 +408,15 @@ class _Run:
         c["normal_solves"] += int(np.count_nonzero(steps["normal_solved"]))
         gross = (regime == Regime.GROSS_SLIDING) & (np.abs(h.Q[idx]) > self.scene.friction * h.P[idx] * (1 + 1e-12))
         if gross.any():
-            if GROSS_SLIDING_MESSAGE not in self.messages:
-                self.messages.append(GROSS_SLIDING_MESSAGE)
+            at = idx[gross]
+            ratio = np.abs(h.Q[at]) / (self.scene.friction * h.P[at])
+            self.log.add_many("gross_sliding", at, h.t[at], ratio, GROSS_SLIDING_MESSAGE)
         mask = (idx % self.save.every == 0) | (idx == n)
         jump = self.skipper.check(stop, state) if self.skipper is not None else None
         if jump is not None:
             mask[-1] = False  # the jumped state is stored in its place, as in the step path
         steps.update(t=h.t[idx], P=h.P[idx], Q=h.Q[idx], M=h.M[idx], sigma=h.sigma[idx])
+        steps["rigid_shift"] = steps.pop("shift")
         self.rec.add_steps(steps, mask)
         self.i, self.state = stop, state
         if jump is not None:
@@ -408,6 +428,7 @@ class _Run:
 
         ds = _dataset(self.rec, self.save)
         scene = self.scene
+        log = self.log.copy()
         ds.attrs.update(
             {
                 "title": f"halfslip run of {scene.name}",
@@ -422,7 +443,7 @@ class _Run:
                 "compliance": scene.material.compliance,
                 "shift_datum": self.solver.datum,
                 "wall_time": self.elapsed_before + elapsed,
-                "messages": "\n".join(self.messages),
+                "messages": "",
                 "skipped_cycles": 0 if self.skipper is None else self.skipper.total,
                 "skipped_cycles_per_segment": "" if self.skipper is None else self.skipper.describe(),
                 **{f"count_{k}": v for k, v in self.counters.items()},
@@ -435,8 +456,10 @@ class _Run:
                 note = (f"the widest slip zone spans only {spacings:.3g} lattice spacings: slip and dissipation are "
                         f"resolved to a few per cent (raise solver.nodes towards "
                         f"{int(math.ceil(RESOLVED_SPACINGS / spacings * scene.solver.nodes))})")
-                ds.attrs["messages"] = "\n".join(m for m in (ds.attrs["messages"], note) if m)
-        return ds
+                log.add(self.i, float(scene.history.t[self.i]), "slip_zone_resolution", spacings, note)
+        # the 0.1 form, kept for one release: the distinct texts, one a line (read message_* instead)
+        ds.attrs["messages"] = "\n".join(log.texts())
+        return ds.assign(log.variables())
 
     def checkpoint(self, elapsed: float) -> dict:
         sk = self.skipper
@@ -444,7 +467,7 @@ class _Run:
             "i": self.i,
             "state": self.state,
             "counters": dict(self.counters),
-            "messages": list(self.messages),
+            "messages": self.log.checkpoint(),
             "elapsed": self.elapsed_before + elapsed,
             "skipper": None if sk is None else {"previous": dict(sk.previous), "skipped": dict(sk.skipped),
                                                 "traces": {k: {"previous": v["previous"],
@@ -471,7 +494,7 @@ class _Run:
         self.i = int(checkpoint["i"])
         self.state = checkpoint["state"]
         self.counters = dict(checkpoint["counters"])
-        self.messages = list(checkpoint["messages"])
+        self.log = MessageLog.from_checkpoint(checkpoint["messages"])
         self.elapsed_before = float(checkpoint["elapsed"])
         if self.skipper is not None and checkpoint["skipper"] is not None:
             self.skipper.previous = dict(checkpoint["skipper"]["previous"])
@@ -503,8 +526,9 @@ class _Run:
         if not (isinstance(counters, dict) and set(counters) == set(self.counters)
                 and all(isinstance(v, int) and v >= 0 for v in counters.values())):
             return "its counters are malformed"
-        if not (isinstance(checkpoint["messages"], list) and all(isinstance(m, str) for m in checkpoint["messages"])):
-            return "its messages are not text"
+        problem = checkpoint_problem(checkpoint["messages"])
+        if problem is not None:
+            return problem
         if not isinstance(checkpoint["elapsed"], float):
             return "its elapsed time is not a number"
         if int(ds.sizes.get("t", 0)) > i + 1:
@@ -540,6 +564,7 @@ class CycleSkipper:
                     self.ends[seg.start + j * seg.steps_per_cycle] = (k, seg)
                 self.segment_of.append((seg.start, seg.stop, k))
         self.t = history.t
+        self.segments = history.segments
         self.previous = {}
         self.skipped = {}
         self.traces = {}  # segment index -> {"previous": edges of the last cycle, "current": this one's}
@@ -579,6 +604,11 @@ class CycleSkipper:
     def total(self) -> int:
         return sum(self.skipped.values())
 
+    @property
+    def skipped_steps(self) -> int:
+        """Steps not marched: skipped cycles times their steps per cycle."""
+        return sum(v * self.segments[k].steps_per_cycle for k, v in self.skipped.items())
+
     def describe(self) -> str:
         return ", ".join(f"loads[{k}]: {v}" for k, v in sorted(self.skipped.items()))
 
@@ -597,6 +627,12 @@ class CycleSkipper:
         self.skipped[k] = remaining
         new = dataclasses.replace(state, t=float(self.t[seg.stop]), dissipation=state.dissipation + remaining * per_cycle)
         return seg.stop, new
+
+
+def _shear_ratio(loads: Loads, friction: float) -> float:
+    """abs(Q) / (f P): above 1 the contact slides as a whole."""
+    carried = friction * loads.P
+    return abs(loads.Q) / carried if carried > 0 else math.inf
 
 
 def _fields(solver, state: ContactState, save: SaveAt) -> dict:
@@ -625,7 +661,7 @@ _META = {
     "stick_left": ("m", "left stick-zone edge"),
     "stick_right": ("m", "right stick-zone edge"),
     "regime": ("1", "contact regime"),
-    "shift": ("m", "rigid tangential displacement of pad relative to substrate"),
+    "rigid_shift": ("m", "rigid tangential displacement of pad relative to substrate"),
     "dissipation": ("J/m", "frictional energy dissipated since the start"),
     "p": ("Pa", "contact pressure"),
     "q": ("Pa", "shear traction exerted by the pad on the substrate"),
@@ -651,6 +687,10 @@ def _dataset(rec: _Records, save: SaveAt) -> xr.Dataset:
     for k in ds.variables:
         units, long_name = _META[k]
         ds[k].attrs.update(units=units, long_name=long_name)
+    ds["t"].attrs["axis"] = "T"
+    if "x" in ds.coords:
+        ds["x"].attrs["axis"] = "X"
+    ds.attrs["Conventions"] = "CF-1.10"
     ds["regime"].attrs.update(
         flag_values=np.arange(4, dtype=np.int8), flag_meanings=Regime.flag_meanings()
     )

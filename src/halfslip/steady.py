@@ -184,6 +184,9 @@ def steady_state(scene, segment: int | None = None, *, per_cycle: bool = True) -
             "(halfslip run) and read the permanent stick zone from the last cycle",
             field=f"loads[{index}]",
         )
+    note, _, warning = note.partition("; warning: ")  # a warning is its own attribute (stderr on the command line)
+    if warning:
+        attrs = {**attrs, "warning": warning}
     ds = xr.Dataset(
         {
             "permanent_stick_left": ((), left, {"units": "m", "long_name": "left edge of the permanent stick zone"}),
@@ -232,7 +235,7 @@ def _in_phase(problem, A, f, one, two):
     note = (f"permanent stick zone from (SS1): load P0 - dQ/(2f) = {load:.6g} N/m, "
             f"rotation alpha0 + A dsigma/(8f) = {alpha:.6g}")
     if abs(math.pi / 4 * d * dsig) >= abs(dQ):
-        note += "; warning: the tension range is not moderate (slip may reverse at one end) -- SS1 assumes it is"
+        note += f"; warning: {TENSION_WARNING}"
     left = max(sol.left, s1.left, s2.left)
     right = min(sol.right, s1.right, s2.right)
     return left, right, Regime.PARTIAL_SLIP, method, note, extra
@@ -268,6 +271,10 @@ def _per_cycle_quantities(scene, index, seg) -> xr.Dataset:
         },
         coords={"x": ("x", ds.x.values, {"units": "m", "long_name": "surface coordinate"})},
     )
+
+
+TENSION_WARNING = "the tension range is not moderate (slip may reverse at one end) -- SS1 assumes it is"
+"""The attribute ``warning`` of a steady state whose tension range SS1 does not cover."""
 
 
 def _version() -> str:

@@ -47,7 +47,7 @@ import sys
 import threading
 import time
 import uuid
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -61,12 +61,14 @@ from .errors import (
     check_count,
     check_mapping,
     check_number,
+    check_string,
     describe,
     EXCERPT_CHARS,
     excerpt,
     join,
 )
 from . import limits
+from .progress import interactive
 from .io import PATH_CHARS, read_input_text
 from .scene import _line_of, _read_yaml, parse_scene
 
@@ -132,6 +134,12 @@ class Sweep:
         A product of value lists (``vary``) or an explicit list (``cases``).
     paths : tuple of str
         The varied scene paths; for a grid, in the order of the dimensions.
+    names : tuple of str
+        The short name of each path: the result's dimension (grid) or
+        coordinate (cases), e.g. ``Q_amplitude`` for
+        ``loads[1].cycles.Q.amplitude``; given in the sweep file
+        (``vary: {Q_amp: {path: ..., values: [...]}}``) or derived
+        (:func:`short_names`).
     axes : tuple of tuple
         For a grid, the values of each path (plain YAML data); empty for cases.
     cases : tuple of dict
@@ -167,6 +175,11 @@ class Sweep:
     file: Path | None
     text: str
     lines: dict[str, int]
+    names: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        if not self.names:
+            object.__setattr__(self, "names", short_names(self.paths))
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -177,8 +190,8 @@ class Sweep:
 
     @property
     def dims(self) -> tuple[str, ...]:
-        """Dimension names of the result arrays."""
-        return self.paths if self.kind == "grid" else ("case",)
+        """Dimension names of the result arrays: the short names (grid) or ('case',)."""
+        return self.names if self.kind == "grid" else ("case",)
 
     @property
     def n_cases(self) -> int:
@@ -467,10 +480,17 @@ def _build_sweep(data: Any, lines: dict[str, int], base: Path, text: str, path: 
                 f"expected a mapping path -> values (a list, or {{linspace: [a, b, n]}}), got {describe(vary)}",
                 field="vary",
             )
-        paths, axes = [], []
+        paths, axes, names = [], [], []
         for key, spec in vary.items():
             field = f"vary.{key}"
-            paths.append(_check_path(key, field))
+            if isinstance(spec, Mapping) and "path" in spec:  # a named axis: {path: ..., values or linspace ...}
+                names.append(_check_name(key, field, names))
+                paths.append(_check_path(check_string(spec["path"], f"{field}.path"), f"{field}.path"))
+                rest = {k: v for k, v in spec.items() if k != "path"}
+                spec, field = (rest["values"], f"{field}.values") if set(rest) == {"values"} else (rest, field)
+            else:
+                names.append(None)
+                paths.append(_check_path(key, field))
             values = _values(spec, field)
             seen = set()
             for i, value in enumerate(values):
@@ -483,8 +503,10 @@ def _build_sweep(data: Any, lines: dict[str, int], base: Path, text: str, path: 
             cases = math.prod(len(values) for values in axes)  # exact integers: no overflow
             if cases > limits.MAX_SWEEP_CASES:
                 raise _too_many_cases(cases, field)
+        derived = short_names(paths, taken=[n for n in names if n is not None])
         sweep = Sweep("grid", tuple(paths), tuple(axes), (), fixed, per_cycle, scene_path, scene_text,
-                      scene_data, path, text, lines)
+                      scene_data, path, text, lines,
+                      tuple(name if name is not None else short for name, short in zip(names, derived)))
     else:
         cases = data["cases"]
         if not isinstance(cases, list) or not cases:
@@ -528,6 +550,47 @@ def _check_path(key: Any, field: str) -> str:
             field=field,
         )
     return key
+
+
+RESERVED_NAMES = frozenset(SUMMARIES) | {"case"}
+"""Names a sweep axis cannot take: the result's variables and the case dimension."""
+
+_GENERIC = frozenset({"amplitude", "mean", "phase", "count", "period", "steps", "steps_per_cycle", "duration"})
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+
+
+def short_names(paths: Sequence[str], taken: Sequence[str] = ()) -> tuple[str, ...]:
+    """A short, distinct name for each scene path: its last word, or more where needed.
+
+    ``friction`` -> ``friction``, ``geometry.radius`` -> ``radius``,
+    ``loads[1].cycles.Q.amplitude`` -> ``Q_amplitude`` (a word like
+    amplitude, mean or phase says little alone); where two paths would share
+    a name, or a name is taken (`taken`, :data:`RESERVED_NAMES`), more words
+    of the path are joined, from the end (``loads1_cycles_Q_amplitude``).
+    """
+    words = [[re.sub(r"[\[\]]", "", w) for w in path.split(".") if w] for path in paths]
+    used = set(RESERVED_NAMES) | set(taken)
+    counts = [2 if w and w[-1] in _GENERIC and len(w) > 1 else 1 for w in words]
+    while True:
+        names = ["_".join(w[-n:]) for w, n in zip(words, counts)]
+        clash = [i for i, name in enumerate(names)
+                 if (names.count(name) > 1 or name in used) and counts[i] < len(words[i])]
+        if not clash:
+            return tuple(names)
+        for i in clash:
+            counts[i] += 1
+
+
+def _check_name(name: Any, field: str, names: Sequence[Any]) -> str:
+    """A sweep axis's given short name: an identifier, not a result variable, not given twice."""
+    if not isinstance(name, str) or not _NAME.match(name):
+        raise HalfslipInputError(f"a name is a word of letters, digits and _ (not first a digit), got {describe(name)}",
+                                 field=field)
+    if name in RESERVED_NAMES:
+        raise HalfslipInputError(f"{name!r} names a variable of the sweep result; choose another name", field=field)
+    if name in names:
+        raise HalfslipInputError(f"the name {name!r} is given twice", field=field)
+    return name
 
 
 def _values(spec: Any, field: str) -> list[Any]:
@@ -579,7 +642,8 @@ def _check_overlaps(sweep: Sweep) -> None:
 def _first_field(sweep: Sweep, path: str) -> str:
     """Sweep-file field where `path` first appears."""
     if sweep.kind == "grid" and path in sweep.paths:
-        return f"vary.{path}"
+        named = f"vary.{sweep.names[sweep.paths.index(path)]}.path"  # vary: {name: {path: ..., values: ...}}
+        return named if named in sweep.lines else f"vary.{path}"
     if sweep.kind == "cases":
         for index, case in enumerate(sweep.cases):
             if path in case:
@@ -878,14 +942,14 @@ def _coordinates(spec: Sweep) -> dict[str, Any]:
     attrs = {"long_name": "varied scene field"}
     if spec.kind == "grid":
         return {
-            path: (path, _coordinate_values(list(values)), {**attrs, "units": _units_of(path)})
-            for path, values in zip(spec.paths, spec.axes)
+            name: (name, _coordinate_values(list(values)), {**attrs, "path": path, "units": _units_of(path)})
+            for name, path, values in zip(spec.names, spec.paths, spec.axes)
         }
     coords: dict[str, Any] = {"case": ("case", np.arange(spec.n_cases), {"long_name": "case number", "units": "1"})}
-    for path in spec.paths:
+    for name, path in zip(spec.names, spec.paths):
         present, base = _get_path(spec.scene_data, path)
         values = [case[path] if path in case else (base if present else None) for case in spec.cases]
-        coords[path] = ("case", _coordinate_values(values), {**attrs, "units": _units_of(path)})
+        coords[name] = ("case", _coordinate_values(values), {**attrs, "path": path, "units": _units_of(path)})
     return coords
 
 
@@ -927,44 +991,32 @@ def is_sweep_result(ds: xr.Dataset) -> bool:
 
 
 class _ProgressLine:
-    """``cases 120/1000, 3 failed, 57.3 cases/s, 15 s left`` on a terminal (stderr)."""
+    """Cases done of all, failed, cases/s and time left: :class:`halfslip.progress.Progress`.
+
+    A line on a terminal (stderr), a bar in a notebook; the rate is the
+    recent one (an exponential mean), not the average since the start.
+    """
 
     def __init__(self, enabled: bool, stream=None):
-        self.stream = stream or sys.stderr
-        self.enabled = enabled
-        self.started = time.perf_counter()
-        self.last = 0.0
-        self.shown = False
+        from .progress import Progress
+
+        self.progress = Progress("case", "cases", enabled=enabled, file=stream)
+        self.done = None
+
+    def start(self, total: int, done: int) -> None:
+        """Show the bar: `done` of `total` cases are done before this call runs any."""
+        self.progress.start(total, done)
+        self.done = done
 
     def __call__(self, done: int, failed: int, total: int, ran: int) -> None:
-        if not self.enabled:
-            return
-        now = time.perf_counter()
-        if now - self.last < 0.2 and done < total:
-            return
-        self.last = now
-        elapsed = now - self.started
-        rate = ran / elapsed if elapsed > 0 else 0.0
-        left = (total - done) / rate if rate > 0 else math.nan
-        self.stream.write(f"\r  cases {done}/{total}, {failed} failed, {rate:,.3g} cases/s, "
-                          f"{_duration(left)} left ")
-        self.stream.flush()
-        self.shown = True
+        if self.done is None:
+            self.start(total, done - ran)
+        self.progress.note(f"{failed} failed")
+        self.progress.advance(done - self.done)
+        self.done = done
 
     def close(self) -> None:
-        if self.shown:
-            self.stream.write("\n")
-            self.stream.flush()
-
-
-def _duration(seconds: float) -> str:
-    if not math.isfinite(seconds):
-        return "? s"
-    if seconds < 120:
-        return f"{seconds:.0f} s"
-    if seconds < 7200:
-        return f"{seconds / 60:.1f} min"
-    return f"{seconds / 3600:.1f} h"
+        self.progress.close()
 
 
 def sweep(
@@ -999,7 +1051,8 @@ def sweep(
         Also write each case's full result (steady-state or simulation
         dataset) to ``case_<index>.h5`` in this folder.
     progress : bool or callable(done, failed, total)
-        True shows a progress line on stderr when it is a terminal; a
+        True shows a progress line on stderr when it is a terminal (a bar in
+        a notebook, :mod:`halfslip.progress`); a
         callable is called in this process after every finished case.
         Raising KeyboardInterrupt from it stops the sweep like Ctrl-C.
     checkpoint_seconds : float
@@ -1049,7 +1102,8 @@ def sweep(
             raise HalfslipInputError(f"must be >= 1, got {workers}", field="workers")
         backend = "in-process" if min(workers, len(pending)) <= 1 else "processes"
     width = len(str(max(spec.n_cases - 1, 0)))
-    show = _ProgressLine(progress is True and sys.stderr.isatty())
+    show = _ProgressLine(progress is True and interactive())
+    show.start(spec.n_cases, spec.n_cases - len(pending))
     callback = progress if callable(progress) else None
     attrs = {
         "title": f"halfslip sweep over {', '.join(spec.paths)}",
@@ -1057,6 +1111,7 @@ def sweep(
         "sweep_hash": spec.hash,
         "sweep_kind": spec.kind,
         "sweep_paths": json.dumps(list(spec.paths)),
+        "sweep_names": json.dumps(list(spec.names)),
         "sweep": spec.text,
         "sweep_file": str(spec.file) if spec.file is not None else "",
         "scene_file": str(spec.scene_path),
