@@ -10,11 +10,11 @@ import sys
 
 def main() -> None:
     try:
-        from halfslip.cli import main as cli
+        from halfslip.cli import run_as_program
     except KeyboardInterrupt:
         sys.stderr.write("halfslip: interrupted\n")
         sys.exit(130)
-    cli()
+    run_as_program()
 
 
 if __name__ == "__main__":

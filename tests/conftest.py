@@ -46,21 +46,3 @@ from hypothesis import settings  # noqa: E402
 settings.register_profile("ci", derandomize=True)
 if os.environ.get("CI"):
     settings.load_profile("ci")
-
-
-@pytest.fixture(autouse=True)
-def _signal_handlers_restored():
-    """Give every test the SIGINT / SIGTERM handlers it started with.
-
-    ``halfslip``'s command group ignores both signals on its way out (a Ctrl-C
-    while the interpreter shuts down must not kill it); in-process runs
-    (CliRunner) would leave this test process ignoring them, and every child
-    process started later inherits that: a test that interrupts a child with
-    SIGINT then waits for a run that never saw the signal.
-    """
-    import signal
-
-    saved = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
-    yield
-    for sig, handler in saved.items():
-        signal.signal(sig, handler)

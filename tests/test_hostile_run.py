@@ -651,3 +651,12 @@ def test_plot_refuses_crafted_files(unfinished, tmp_path, route):
         assert_clean_refusal(done, target, "neither numbers nor text")
     else:
         assert_clean_refusal(done, target, "not a halfslip result")
+
+
+def test_in_process_commands_leave_the_signal_handlers_alone(cli, tmp_path):
+    """Only the program (console script, python -m) ignores interrupts on its way out; a caller of
+    ``main`` in its own process (CliRunner, a notebook) keeps its handlers."""
+    before = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
+    cli("validate", tmp_path / "missing.yaml")
+    cli("frobnicate")
+    assert {sig: signal.getsignal(sig) for sig in before} == before

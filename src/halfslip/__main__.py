@@ -1,5 +1,5 @@
 """``python -m halfslip``: the command line (halfslip.cli)."""
-from halfslip.cli import main
+from halfslip.cli import run_as_program
 
 if __name__ == "__main__":
-    main(prog_name="halfslip")
+    run_as_program()

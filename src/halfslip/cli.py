@@ -62,27 +62,29 @@ class HalfslipGroup(click.Group):
             click.echo(f"halfslip: {_one_line(error.format_message())}", err=True)
             sys.exit(error.exit_code)
         except (click.Abort, KeyboardInterrupt):
-            _ignore_interrupts()
             click.echo("halfslip: interrupted", err=True)
             sys.exit(EXIT_INTERRUPTED)
-        _ignore_interrupts()
         sys.exit(code if isinstance(code, int) else 0)
 
     def _main(self, args, prog_name, complete_var, **extra):
-        try:
-            return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
-        except SystemExit:
-            # a command's own exit (e.g. 130 after an interrupted run): what is written is written;
-            # a further Ctrl-C while the interpreter shuts down must not kill it by the signal
-            _ignore_interrupts()
-            raise
+        return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
 
 
-def _ignore_interrupts() -> None:
+def run_as_program(prog_name: str = "halfslip") -> None:
+    """The command line as a process of its own (console script, ``python -m``).
+
+    Exits through :func:`main`; on the way out interrupts are ignored: what
+    was written is written, and a further Ctrl-C while the interpreter shuts
+    down (when Python has put the default action back) must not kill the
+    process by the signal. In-process callers of ``main`` keep their handlers.
+    """
     import signal
 
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    try:
+        main(prog_name=prog_name)
+    finally:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
 
 
 _NO_ARGS_IS_HELP = getattr(click.exceptions, "NoArgsIsHelpError", ())  # click >= 8.2
@@ -638,4 +640,4 @@ def sweep_command(sweep_file: str, output: str | None, workers: int | None, sche
 
 
 if __name__ == "__main__":
-    main()
+    run_as_program()
