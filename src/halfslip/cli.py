@@ -435,7 +435,8 @@ def summarize(result, path) -> list[str]:
         energy = post.dissipation_per_cycle(result)["dissipation"].values
         first = f", first cycle {energy[0]:.6g} J/m" if energy.size > 1 else ""
         lines.append(f"  dissipation per cycle {energy[-1]:.6g} J/m (last full cycle){first}")
-    lines.append(f"  dissipated {float(last.dissipation):.6g} J/m in total")
+    total = result["final_dissipation"] if "final_dissipation" in result else last.dissipation  # skipped cycles too
+    lines.append(f"  dissipated {float(total):.6g} J/m in total")
     failed = int(result.attrs.get("count_failed_steps", 0))
     if failed and "converged" in result:
         bad = result["converged"].values == 0

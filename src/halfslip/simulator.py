@@ -15,6 +15,7 @@ from typing import Callable
 import numpy as np
 import xarray as xr
 
+from .cycles import CycleSkipper, SkipState, describe_skips, segment_table
 from .geometry import NormalProblem
 from .scene import check_run_bytes
 from .state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime
@@ -126,7 +127,10 @@ def slip_zone_spacings(ds: xr.Dataset, nodes: int) -> float:
 
 
 def _dtype(name: str):
-    """Storage type of a per-step column: the regime code and the converged flag are int8, the rest float."""
+    """Storage type of a per-step column: the regime code and the converged flag are int8, the step index
+    int64, the rest float."""
+    if name == "step":
+        return np.int64
     return np.int8 if name in ("regime", "converged") else float
 
 
@@ -137,7 +141,7 @@ class _Records:
     are kept as arrays. ``column(name)`` joins both in order.
     """
 
-    names = ("t", "P", "Q", "M", "sigma", "contact_left", "contact_right",
+    names = ("t", "step", "P", "Q", "M", "sigma", "contact_left", "contact_right",
              "stick_left", "stick_right", "regime", "shift", "dissipation", "converged", "residual")
 
     def __init__(self):
@@ -151,9 +155,10 @@ class _Records:
                 self.chunks[k].append(np.asarray(self.buffer[k], _dtype(k)))
                 self.buffer[k] = []
 
-    def add(self, state: ContactState, regime: Regime, converged: bool = True, residual: float = 0.0):
+    def add(self, step: int, state: ContactState, regime: Regime, converged: bool = True, residual: float = 0.0):
         c = self.buffer
         c["t"].append(state.t)
+        c["step"].append(step)
         for k, v in zip(("P", "Q", "M", "sigma"), state.loads):
             c[k].append(v)
         c["contact_left"].append(state.contact_left)
@@ -329,15 +334,17 @@ class _Run:
         self.counters = {"steps": 0, "stick_steps": 0, "slip_solves": 0, "normal_solves": 0, "failed_steps": 0}
         self.messages: list[str] = []
         self.skipper = CycleSkipper(h, self.solver) if scene.solver.skip_steady_cycles else None
+        self.skip = SkipState()  # what the skipper has seen: replaced, never changed, and checkpointed
         self.elapsed_before = 0.0
         # compiled marching of many steps at once where the solver offers it (extents only)
         self.chunked = not fields and self.solver.can_march
-        self._store(Regime.SEPARATED)
+        self._store(0, self.state, Regime.SEPARATED)
 
-    def _store(self, regime: Regime, converged: bool = True, residual: float = 0.0) -> None:
-        self.rec.add(self.state, regime, converged, residual)
+    def _store(self, i: int, state: ContactState, regime: Regime, converged: bool = True,
+               residual: float = 0.0) -> None:
+        self.rec.add(i, state, regime, converged, residual)
         if self.save.fields:
-            self.rec.add_fields(_fields(self.solver, self.state, self.save))
+            self.rec.add_fields(_fields(self.solver, state, self.save))
 
     def advance(self) -> None:
         """One step, or with a compiled solver a chunk of steps up to the next cycle end."""
@@ -357,16 +364,14 @@ class _Run:
         c["failed_steps"] += not report.converged
         if report.message and report.message not in self.messages:
             self.messages.append(report.message)
-        jumped = False
+        jump = None
         if self.skipper is not None:
-            self.skipper.observe(i, state)
-            jump = self.skipper.check(i, state)
-            if jump is not None:
-                i, state = jump
-                jumped = True
-        self.i, self.state = i, state
-        if self.save.stored(i, n) or jumped or not report.converged:  # a failed step is always stored
-            self._store(report.regime, report.converged, report.residual)
+            self.skip = self.skipper.observe(self.skip, i, state)
+            self.skip, jump = self.skipper.check(self.skip, i, state)
+        # a failed step is always stored, and so is the last marched step before a skip
+        if self.save.stored(i, n) or jump is not None or not report.converged:
+            self._store(i, state, report.regime, report.converged, report.residual)
+        self.i, self.state = (i, state) if jump is None else jump
 
     def _advance_chunk(self) -> None:
         h = self.scene.history
@@ -388,21 +393,25 @@ class _Run:
             if GROSS_SLIDING_MESSAGE not in self.messages:
                 self.messages.append(GROSS_SLIDING_MESSAGE)
         mask = (idx % self.save.every == 0) | (idx == n)
-        jump = self.skipper.check(stop, state) if self.skipper is not None else None
+        jump = None
+        if self.skipper is not None:
+            self.skip, jump = self.skipper.check(self.skip, stop, state)
         if jump is not None:
-            mask[-1] = False  # the jumped state is stored in its place, as in the step path
-        steps.update(t=h.t[idx], P=h.P[idx], Q=h.Q[idx], M=h.M[idx], sigma=h.sigma[idx])
+            mask[-1] = True  # the last marched step before a skip is stored, as in the step path
+        steps.update(t=h.t[idx], step=idx, P=h.P[idx], Q=h.Q[idx], M=h.M[idx], sigma=h.sigma[idx])
         self.rec.add_steps(steps, mask)
-        self.i, self.state = stop, state
-        if jump is not None:
-            self.i, self.state = jump
-            self._store(Regime(int(regime[-1])))
+        self.i, self.state = (stop, state) if jump is None else jump
 
     def dataset(self, complete: int, elapsed: float) -> xr.Dataset:
         from ._version import __version__
 
         ds = _dataset(self.rec, self.save)
         scene = self.scene
+        skip = None if self.skipper is None else self.skip
+        ds = ds.assign(segment_table(scene.history, skip))
+        for name, value in (("final_t", self.state.t), ("final_dissipation", self.state.dissipation)):
+            units, long_name = _META[name]
+            ds[name] = ((), float(value), {"units": units, "long_name": long_name})
         ds.attrs.update(
             {
                 "title": f"halfslip run of {scene.name}",
@@ -418,8 +427,9 @@ class _Run:
                 "shift_datum": self.solver.datum,
                 "wall_time": self.elapsed_before + elapsed,
                 "messages": "\n".join(self.messages),
-                "skipped_cycles": 0 if self.skipper is None else self.skipper.total,
-                "skipped_cycles_per_segment": "" if self.skipper is None else self.skipper.describe(),
+                "output_every": scene.output.every,
+                "skipped_cycles": self.skip.total,
+                "skipped_cycles_per_segment": describe_skips(skip),
                 **{f"count_{k}": v for k, v in self.counters.items()},
             }
         )
@@ -434,17 +444,13 @@ class _Run:
         return ds
 
     def checkpoint(self, elapsed: float) -> dict:
-        sk = self.skipper
         return {
             "i": self.i,
             "state": self.state,
             "counters": dict(self.counters),
             "messages": list(self.messages),
             "elapsed": self.elapsed_before + elapsed,
-            "skipper": None if sk is None else {"previous": dict(sk.previous), "skipped": dict(sk.skipped),
-                                                "traces": {k: {"previous": v["previous"],
-                                                               "current": np.asarray(v["current"], float).reshape(-1, 2)}
-                                                           for k, v in sk.traces.items()}},
+            "skipper": None if self.skipper is None else self.skip.to_tree(),
         }
 
     def restore(self, ds: xr.Dataset, checkpoint: dict) -> None:
@@ -469,11 +475,7 @@ class _Run:
         self.messages = list(checkpoint["messages"])
         self.elapsed_before = float(checkpoint["elapsed"])
         if self.skipper is not None and checkpoint["skipper"] is not None:
-            self.skipper.previous = dict(checkpoint["skipper"]["previous"])
-            self.skipper.skipped = dict(checkpoint["skipper"]["skipped"])
-            self.skipper.traces = {k: {"previous": v["previous"], "current": [tuple(r) for r in v["current"]]}
-                                   for k, v in checkpoint["skipper"].get("traces", {}).items()}
-
+            self.skip = SkipState.from_tree(checkpoint["skipper"])
 
     def _checkpoint_problem(self, ds: xr.Dataset, checkpoint) -> str | None:
         """What is wrong with a decoded checkpoint for this run (None when it fits).
@@ -502,96 +504,17 @@ class _Run:
             return "its messages are not text"
         if not isinstance(checkpoint["elapsed"], float):
             return "its elapsed time is not a number"
+        if "step" not in ds.variables or "segment_kind" not in ds.variables:
+            return "the file was written by halfslip 0.2 or older (no step index, no segment table); run it again"
+        skipper = checkpoint["skipper"]
+        if skipper is not None:
+            try:
+                SkipState.from_tree(skipper)
+            except (TypeError, ValueError, KeyError, AttributeError):
+                return "its cycle skipper state is malformed"
         if int(ds.sizes.get("t", 0)) > i + 1:
             return "the file stores more steps than the checkpoint has marched"
         return None
-
-
-class CycleSkipper:
-    """Stops marching a ``cycles`` segment once its cycle repeats.
-
-    After each full cycle the state is compared (``solver.same_state``, to the
-    solver's tolerance) with the state one cycle earlier. When they agree the
-    remaining cycles are skipped: time jumps to the segment's end, the state is
-    the repeated one, and the dissipation grows by the remaining cycles times
-    the dissipation of the last cycle -- exact, since every cycle from then on
-    is the same. Every cycle of a segment is sampled bit-identically, so the
-    state at the segment's end is the state at the end of any steady cycle.
-    """
-
-    def __init__(self, history, solver):
-        self.same = solver.same_state
-        # a solver whose states agree only to a tolerance also asks that the cycle's stick
-        # edges repeat, step by step, to ``cycle_tolerance(state)`` [m]: a difference that
-        # the memory at the cycle's end hides (a slip zone that reached less far at a peak
-        # in a narrow strip) shows there
-        self.tolerance = solver.cycle_tolerance
-        self.ends = {}  # step index of a cycle end -> (segment index, segment)
-        self.segment_of = []  # (start, stop, segment index) of the cycles segments
-        self._sorted_ends = None
-        for k, seg in enumerate(history.segments):
-            if seg.kind == "cycles" and seg.count and seg.count > 2:
-                for j in range(1, seg.count):
-                    self.ends[seg.start + j * seg.steps_per_cycle] = (k, seg)
-                self.segment_of.append((seg.start, seg.stop, k))
-        self.t = history.t
-        self.previous = {}
-        self.skipped = {}
-        self.traces = {}  # segment index -> {"previous": edges of the last cycle, "current": this one's}
-
-    def observe(self, i: int, state: ContactState) -> None:
-        """Record the stick edges of step i (only when the solver states a cycle tolerance)."""
-        if self.tolerance is None:
-            return
-        for start, stop, k in self.segment_of:
-            if start < i <= stop:
-                trace = self.traces.setdefault(k, {"previous": None, "current": []})
-                trace["current"].append((state.stick_left, state.stick_right))
-                return
-
-    def _trajectory_repeats(self, k: int, state: ContactState) -> bool:
-        if self.tolerance is None:
-            return True
-        trace = self.traces.get(k)
-        if trace is None:
-            return False
-        prev, cur = trace["previous"], np.asarray(trace["current"], dtype=float).reshape(-1, 2)
-        trace["previous"], trace["current"] = cur, []
-        if prev is None or prev.shape != cur.shape:
-            return False
-        both_nan = np.isnan(prev) & np.isnan(cur)
-        diff = np.where(both_nan, 0.0, np.abs(prev - cur))
-        return bool(np.all(diff <= self.tolerance(state)))  # NaN against a number fails
-
-    def next_end(self, i: int) -> int:
-        """The first cycle end after step i (a large number when there is none)."""
-        if self._sorted_ends is None:
-            self._sorted_ends = np.array(sorted(self.ends), dtype=np.int64)
-        k = int(np.searchsorted(self._sorted_ends, i, side="right"))
-        return int(self._sorted_ends[k]) if k < len(self._sorted_ends) else 1 << 62
-
-    @property
-    def total(self) -> int:
-        return sum(self.skipped.values())
-
-    def describe(self) -> str:
-        return ", ".join(f"loads[{k}]: {v}" for k, v in sorted(self.skipped.items()))
-
-    def check(self, i: int, state: ContactState):
-        """Return (new index, new state) when the rest of the segment is skipped."""
-        if i not in self.ends:
-            return None
-        k, seg = self.ends[i]
-        prev = self.previous.get(k)
-        self.previous[k] = state
-        repeats = self._trajectory_repeats(k, state)
-        if prev is None or not repeats or not self.same(prev, state):
-            return None
-        remaining = (seg.stop - i) // seg.steps_per_cycle
-        per_cycle = state.dissipation - prev.dissipation
-        self.skipped[k] = remaining
-        new = dataclasses.replace(state, t=float(self.t[seg.stop]), dissipation=state.dissipation + remaining * per_cycle)
-        return seg.stop, new
 
 
 def _fields(solver, state: ContactState, save: SaveAt) -> dict:
@@ -610,6 +533,9 @@ def _fields(solver, state: ContactState, save: SaveAt) -> dict:
 
 _META = {
     "t": ("s", "time"),
+    "step": ("1", "index of the step in the load history"),
+    "final_t": ("s", "time of the run's last state (after skipped cycles: the end they stand for)"),
+    "final_dissipation": ("J/m", "frictional energy dissipated up to the run's last state, skipped cycles included"),
     "x": ("m", "surface coordinate"),
     "P": ("N/m", "normal load"),
     "Q": ("N/m", "shear force"),

@@ -239,27 +239,30 @@ def _in_phase(problem, A, f, one, two):
 
 
 def _per_cycle_quantities(scene, index, seg) -> xr.Dataset:
-    """March the history up to two cycles of the segment; measure the second cycle."""
+    """March the history up to two cycles of the segment; measure the second cycle.
+
+    The short history keeps the segments before ``index`` and the first two
+    cycles of the segment itself, so the run's segment table lists its cycles
+    and :mod:`halfslip.post` measures the last one, as for any run.
+    """
+    from . import post
     from .histories import LoadHistory
     from .simulator import simulate
 
-    spc = seg.steps_per_cycle
-    stop = seg.start + 2 * spc
+    count = min(2, int(seg.count))
+    stop = seg.start + count * seg.steps_per_cycle
     h = scene.history
-    sl = slice(0, min(stop, seg.stop) + 1)
-    history = LoadHistory.from_arrays(h.t[sl], h.P[sl], h.Q[sl], h.M[sl], h.sigma[sl])
+    sl = slice(0, stop + 1)
+    cycles = dataclasses.replace(seg, stop=stop, t_stop=float(h.t[stop]), count=count)
+    history = LoadHistory(h.t[sl], {name: values[sl] for name, values in h.loads().items()},
+                          (*h.segments[:index], cycles))
     short = dataclasses.replace(
         scene, history=history, output=dataclasses.replace(scene.output, fields=("slip",), every=1),
         solver=dataclasses.replace(scene.solver, skip_steady_cycles=False),
     )
-    try:
-        ds = simulate(short)
-    except ImportError:  # the general solver is not available
-        return xr.Dataset()
-    last = ds.isel(t=slice(-spc - 1, None))
-    slip = last["slip"]
-    amplitude = 0.5 * (slip.max("t") - slip.min("t"))
-    dissipated = float(last["dissipation"][-1] - last["dissipation"][0])
+    ds = simulate(short)
+    amplitude = post.slip_amplitude(ds)
+    dissipated = float(post.dissipation_per_cycle(ds)["dissipation"][-1])
     return xr.Dataset(
         {
             "dissipation_per_cycle": ((), dissipated, {"units": "J/m", "long_name": "energy dissipated per steady cycle"}),
@@ -271,6 +274,6 @@ def _per_cycle_quantities(scene, index, seg) -> xr.Dataset:
 
 
 def _version() -> str:
-    from . import __version__
+    from ._version import __version__
 
     return __version__

@@ -740,14 +740,19 @@ def march_case(scene) -> tuple[dict[str, float], str, xr.Dataset]:
     """March `scene` with :func:`~halfslip.simulator.simulate` and summarise its last cycle.
 
     The last cycle is the last fully stored cycle of the last ``cycles``
-    segment (with ``skip_steady_cycles`` the cycle before the skip, which is
-    the steady one). Every step is stored (``output.every = 1``) and ``slip``
-    is added to the stored fields. The permanent stick zone is the
-    intersection of the stick zones of that cycle's steps; the regime is
-    gross sliding if any step slides, full stick if every step sticks, else
-    partial slip. Without a cycles segment the window is the last segment of
-    the history and the per-cycle quantities are NaN.
+    segment (with ``skip_steady_cycles`` the last marched one, which the
+    skipped ones repeat), found by :func:`halfslip.post.cycles` from the
+    result's segment table. Every step is stored (``output.every = 1``) and
+    ``slip`` is added to the stored fields. The permanent stick zone is the
+    intersection of the stick zones of that cycle's steps
+    (:func:`halfslip.post.permanent_stick`); the regime is gross sliding if
+    any step slides, full stick if every step sticks, else partial slip
+    (:func:`halfslip.cycles.window_regime`). Without a cycles segment the
+    window is the last segment of the history and the per-cycle quantities
+    are NaN.
     """
+    from . import post
+    from .cycles import read_segments, stick_intersection, window_regime
     from .simulator import simulate
 
     fields = tuple(dict.fromkeys((*scene.output.fields, "slip")))
@@ -755,58 +760,23 @@ def march_case(scene) -> tuple[dict[str, float], str, xr.Dataset]:
     ds = simulate(scene)
     if not ds.attrs.get("complete", 1):
         raise _CaseInterrupted
-    history = scene.history
-    steps = np.searchsorted(history.t, ds["t"].values)  # stored record -> step index
-    dissipation = ds["dissipation"].values.copy()
-    cycles = [segment for segment in history.segments if segment.kind == "cycles"]
+    segments = read_segments(ds)
+    cyclic = segments.cycles()
     summaries = _empty_summaries()
-    if cycles:
-        segment = cycles[-1]
-        spc = segment.steps_per_cycle
-        inside = np.flatnonzero((steps > segment.start) & (steps <= segment.stop))
-        if inside.size >= 2 and steps[inside[-1]] == segment.stop and steps[inside[-2]] < segment.stop - 1:
-            # the skip of steady cycles: the record at the segment's end holds the state at the
-            # cycle end j where marching stopped, with r more cycles' dissipation added
-            last, jumped_from = inside[-1], steps[inside[-2]] + 1
-            remaining = (segment.stop - jumped_from) // spc
-            start = np.flatnonzero(steps == jumped_from - spc)
-            steps = steps.copy()
-            steps[last] = jumped_from
-            if start.size:
-                per_cycle = (dissipation[last] - dissipation[start[0]]) / (remaining + 1)
-                dissipation[last] -= remaining * per_cycle
-        stored = set(steps.tolist())
-        end = None
-        for candidate in range(segment.stop, segment.start + spc - 1, -1):
-            if all(step in stored for step in range(candidate - spc, candidate + 1)):
-                end = candidate
-                break
-        if end is None:
+    if cyclic:
+        table = post.cycles(ds)
+        table = table.isel(cycle=np.flatnonzero(table["segment"].values == cyclic[-1]))
+        if not table.sizes["cycle"]:
             raise RuntimeError("the marched result holds no complete cycle of the last cycles segment")
-        window = np.isin(steps, np.arange(end - spc, end + 1))
+        part = ds.isel(t=slice(int(table["i_start"][-1]), int(table["i_stop"][-1]) + 1))
+        summaries["dissipation_per_cycle"] = float(part["dissipation"][-1] - part["dissipation"][0])
+        summaries["peak_slip_amplitude"] = float(post.slip_amplitude(part, cycle=None).max())
     else:  # no cycles: the last segment of the history
-        last_segment = history.segments[-1]
-        window = (steps >= last_segment.start) & (steps <= last_segment.stop)
-    part = ds.isel(t=np.flatnonzero(window))
-    left = float(part["stick_left"].max()) if not part["stick_left"].isnull().any() else math.nan
-    right = float(part["stick_right"].min()) if not part["stick_right"].isnull().any() else math.nan
-    if not left < right:
-        left = right = math.nan
-    regime = part["regime"].values[1:] if part.sizes["t"] > 1 else part["regime"].values
-    if np.any(regime == 3):
-        summaries["regime"] = 3
-    elif np.all(regime == 1):
-        summaries["regime"] = 1
-    elif np.all(regime == 0):
-        summaries["regime"] = 0
-    else:
-        summaries["regime"] = 2
+        steps = ds["step"].values
+        part = ds.isel(t=np.flatnonzero((steps >= segments.first_step[-1]) & (steps <= segments.last_step[-1])))
+    left, right = stick_intersection(part["stick_left"].values, part["stick_right"].values)
     summaries["permanent_stick_left"], summaries["permanent_stick_right"] = left, right
-    if cycles:
-        cycle = dissipation[np.flatnonzero(window)]
-        summaries["dissipation_per_cycle"] = float(cycle[-1] - cycle[0])
-        slip = part["slip"]
-        summaries["peak_slip_amplitude"] = float((0.5 * (slip.max("t") - slip.min("t"))).max())
+    summaries["regime"] = window_regime(part["regime"].values)
     return summaries, f"march: {ds.attrs['method']}", ds
 
 
