@@ -30,6 +30,7 @@ from typing import Mapping
 import numpy as np
 import xarray as xr
 
+from . import variables
 from .errors import HalfslipInputError
 from .histories import SEGMENT_KINDS as HISTORY_SEGMENT_KINDS
 from .state import ContactState
@@ -204,19 +205,7 @@ class CycleSkipper:
 SEGMENT_KINDS = (*HISTORY_SEGMENT_KINDS, "arrays")
 """The codes of ``segment_kind`` (flag_values 0..4, flag_meanings in this order)."""
 
-SEGMENT_VARIABLES = {
-    "segment_kind": ("1", "kind of the load segment (flag_meanings)"),
-    "segment_first_step": ("1", "index of the load history step where the segment begins"),
-    "segment_last_step": ("1", "index of the load history step where the segment ends"),
-    "segment_t_start": ("s", "time where the segment begins"),
-    "segment_t_stop": ("s", "time where the segment ends"),
-    "segment_period": ("s", "cycle period (NaN unless cycles)"),
-    "segment_cycle_count": ("1", "number of cycles (0 unless cycles)"),
-    "segment_steps_per_cycle": ("1", "load history steps per cycle (0 unless cycles)"),
-    "segment_cycles_skipped": ("1", "cycles not marched: repeats of the last marched cycle"),
-    "segment_skip_t_start": ("s", "end of the last marched cycle, where the skipped cycles start (NaN if none)"),
-    "segment_skip_dissipation": ("J/m", "energy dissipated by the skipped cycles (0 if none)"),
-}
+SEGMENT_VARIABLES = variables.SEGMENT
 """The variables over the ``segment`` dimension of a result: name -> (units, long_name)."""
 
 
@@ -239,7 +228,7 @@ def segment_table(history, skip: SkipState | None) -> dict:
         "segment_skip_t_start": np.array([skipped.get(k, none).t_from for k in range(len(segments))], float),
         "segment_skip_dissipation": np.array([skipped.get(k, none).dissipation for k in range(len(segments))], float),
     }
-    table = {name: (SEGMENT_DIM, array, _attrs(*SEGMENT_VARIABLES[name])) for name, array in values.items()}
+    table = {name: (SEGMENT_DIM, array, variables.attrs(name)) for name, array in values.items()}
     table["segment_kind"][2].update(flag_values=np.arange(len(SEGMENT_KINDS), dtype=np.int8),
                                     flag_meanings=" ".join(SEGMENT_KINDS))
     return table
@@ -377,6 +366,3 @@ def window_regime(regime: np.ndarray) -> int:
         return 0
     return 2
 
-
-def _attrs(units: str, long_name: str) -> dict:
-    return {"units": units, "long_name": long_name}

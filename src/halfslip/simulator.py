@@ -15,13 +15,11 @@ from typing import Callable
 import numpy as np
 import xarray as xr
 
+from . import variables
 from .cycles import CycleSkipper, SkipState, describe_skips, segment_table
 from .geometry import NormalProblem
-from .scene import check_run_bytes
+from .scene import FIELDS, METHODS, check_run_bytes  # FIELDS, METHODS: defined once, in scene.py
 from .state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime
-
-METHODS = ("auto", "exact", "general")
-FIELDS = ("p", "q", "slip")
 CHUNK = 4096  # steps per call of a compiled marcher
 
 
@@ -300,8 +298,7 @@ def _add_permanent_stick(ds: xr.Dataset) -> None:
     except HalfslipInputError:  # no cycles segment, or no full cycle stored
         return
     for side in ("left", "right"):
-        ds[f"permanent_stick_{side}"] = ((), float(zone[side]), {
-            "units": "m", "long_name": f"{side} edge of the permanent stick zone (last full cycle)"})
+        ds[f"permanent_stick_{side}"] = ((), float(zone[side]), variables.attrs(f"permanent_stick_{side}"))
 
 
 def scene_hash(scene) -> str:
@@ -410,8 +407,7 @@ class _Run:
         skip = None if self.skipper is None else self.skip
         ds = ds.assign(segment_table(scene.history, skip))
         for name, value in (("final_t", self.state.t), ("final_dissipation", self.state.dissipation)):
-            units, long_name = _META[name]
-            ds[name] = ((), float(value), {"units": units, "long_name": long_name})
+            ds[name] = ((), float(value), variables.attrs(name))
         ds.attrs.update(
             {
                 "title": f"halfslip run of {scene.name}",
@@ -531,29 +527,6 @@ def _fields(solver, state: ContactState, save: SaveAt) -> dict:
     return out
 
 
-_META = {
-    "t": ("s", "time"),
-    "step": ("1", "index of the step in the load history"),
-    "final_t": ("s", "time of the run's last state (after skipped cycles: the end they stand for)"),
-    "final_dissipation": ("J/m", "frictional energy dissipated up to the run's last state, skipped cycles included"),
-    "x": ("m", "surface coordinate"),
-    "P": ("N/m", "normal load"),
-    "Q": ("N/m", "shear force"),
-    "M": ("N", "moment about the pad axis"),
-    "sigma": ("Pa", "differential bulk tension sigma_A - sigma_B"),
-    "contact_left": ("m", "left contact edge"),
-    "contact_right": ("m", "right contact edge"),
-    "stick_left": ("m", "left stick-zone edge"),
-    "stick_right": ("m", "right stick-zone edge"),
-    "regime": ("1", "contact regime"),
-    "shift": ("m", "rigid tangential displacement of pad relative to substrate"),
-    "dissipation": ("J/m", "frictional energy dissipated since the start"),
-    "p": ("Pa", "contact pressure"),
-    "q": ("Pa", "shear traction exerted by the pad on the substrate"),
-    "slip": ("m", "accumulated slip since the point entered contact"),
-    "converged": ("1", "whether the step met the method's own tolerance (1) or not (0)"),
-    "residual": ("1", "violation of the step's checks relative to their tolerance (<= 1 when converged)"),
-}
 
 
 def _dataset(rec: _Records, save: SaveAt) -> xr.Dataset:
@@ -568,9 +541,6 @@ def _dataset(rec: _Records, save: SaveAt) -> xr.Dataset:
             data[k] = (("t", "x"), np.asarray(rows, float))
     ds = xr.Dataset(data, coords=coords)
     for k in ds.variables:
-        units, long_name = _META[k]
-        ds[k].attrs.update(units=units, long_name=long_name)
-    ds["regime"].attrs.update(
-        flag_values=np.arange(4, dtype=np.int8), flag_meanings=Regime.flag_meanings()
-    )
+        ds[k].attrs.update(variables.attrs(k))
+    ds["regime"].attrs.update(flag_values=Regime.flag_values(), flag_meanings=Regime.flag_meanings())
     return ds

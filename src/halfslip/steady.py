@@ -29,6 +29,8 @@ from scipy.optimize import brentq
 from .errors import HalfslipInputError
 from .geometry import Hertz, NormalProblem
 from .state import Regime
+from . import variables
+from .variables import SUMMARY
 
 LOADS = ("P", "Q", "M", "sigma")
 
@@ -186,11 +188,10 @@ def steady_state(scene, segment: int | None = None, *, per_cycle: bool = True) -
         )
     ds = xr.Dataset(
         {
-            "permanent_stick_left": ((), left, {"units": "m", "long_name": "left edge of the permanent stick zone"}),
-            "permanent_stick_right": ((), right, {"units": "m", "long_name": "right edge of the permanent stick zone"}),
-            "regime": ((), np.int8(regime), {"units": "1", "long_name": "steady-cycle regime",
-                                             "flag_values": np.arange(4, dtype=np.int8),
-                                             "flag_meanings": Regime.flag_meanings()}),
+            "permanent_stick_left": ((), left, variables.attrs("permanent_stick_left", SUMMARY)),
+            "permanent_stick_right": ((), right, variables.attrs("permanent_stick_right", SUMMARY)),
+            "regime": ((), np.int8(regime), variables.attrs("regime", SUMMARY, flag_values=Regime.flag_values(),
+                                                  flag_meanings=Regime.flag_meanings())),
         },
         attrs={"halfslip_version": _version(), "method": method, "note": note, "scene_name": scene.name,
                "max_shear_ratio": shear_ratio, **attrs},
@@ -265,11 +266,11 @@ def _per_cycle_quantities(scene, index, seg) -> xr.Dataset:
     dissipated = float(post.dissipation_per_cycle(ds)["dissipation"][-1])
     return xr.Dataset(
         {
-            "dissipation_per_cycle": ((), dissipated, {"units": "J/m", "long_name": "energy dissipated per steady cycle"}),
-            "peak_slip_amplitude": ((), float(amplitude.max()), {"units": "m", "long_name": "peak slip amplitude in the steady cycle"}),
-            "slip_amplitude": (("x",), amplitude.values, {"units": "m", "long_name": "slip amplitude in the steady cycle"}),
+            "dissipation_per_cycle": ((), dissipated, variables.attrs("dissipation_per_cycle", SUMMARY)),
+            "peak_slip_amplitude": ((), float(amplitude.max()), variables.attrs("peak_slip_amplitude", SUMMARY)),
+            "slip_amplitude": (("x",), amplitude.values, variables.attrs("slip_amplitude", SUMMARY)),
         },
-        coords={"x": ("x", ds.x.values, {"units": "m", "long_name": "surface coordinate"})},
+        coords={"x": ("x", ds.x.values, variables.attrs("x"))},
     )
 
 

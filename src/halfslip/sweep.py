@@ -69,6 +69,8 @@ from .errors import (
 from . import limits
 from .io import PATH_CHARS, read_input_text
 from .scene import _line_of, _read_yaml, parse_scene
+from .state import Regime
+from .variables import SUMMARY
 
 __all__ = [
     "SUMMARIES",
@@ -80,24 +82,16 @@ __all__ = [
     "sweep",
 ]
 
-SUMMARIES: dict[str, tuple[str, str]] = {
-    "permanent_stick_left": ("m", "left edge of the permanent stick zone"),
-    "permanent_stick_right": ("m", "right edge of the permanent stick zone"),
-    "peak_slip_amplitude": ("m", "peak slip amplitude in the steady cycle"),
-    "dissipation_per_cycle": ("J/m", "energy dissipated per steady cycle"),
-    "regime": ("1", "steady-cycle regime"),
-    "status": ("1", "'ok', 'not run', or the one-line error of the case"),
-    "run_time": ("s", "wall-clock time of the case"),
-    "method": ("1", "how the case was solved: 'steady: <construction>' or 'march: <method>'"),
-    "done": ("1", "the case has run (successfully or not)"),
-}
+SUMMARIES: dict[str, tuple[str, str]] = {name: SUMMARY[name] for name in (
+    "permanent_stick_left", "permanent_stick_right", "peak_slip_amplitude", "dissipation_per_cycle", "regime",
+    "status", "run_time", "method", "done")}
 """Per-case variables of a sweep result: name -> (units, long_name)."""
 
 REGIME_NO_RESULT = -1
 """``regime`` of a case that has not run or failed."""
 
-_REGIME_FLAGS = np.array([-1, 0, 1, 2, 3], dtype=np.int8)
-_REGIME_MEANINGS = "no_result separated full_stick partial_slip gross_sliding"
+_REGIME_FLAGS = np.concatenate([[REGIME_NO_RESULT], Regime.flag_values()]).astype(np.int8)
+_REGIME_MEANINGS = "no_result " + Regime.flag_meanings()  # a run's names, and one for no result
 
 NOT_RUN = "not run"
 """``status`` of a case that has not run yet."""
