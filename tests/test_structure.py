@@ -216,3 +216,33 @@ def test_a_result_without_a_segment_table_is_refused_in_one_line(skipped_and_ful
     with pytest.raises(hs.HalfslipInputError, match="no segment table") as caught:
         post.cycles(old)
     assert "\n" not in str(caught.value)
+
+
+@pytest.mark.parametrize("stop_after", [60, -2])  # before the skip (mid-cycles), after it (in the hold)
+def test_an_interrupted_run_with_skipped_cycles_resumes_to_the_same_file(tmp_path, stop_after):
+    """The skipper's state is part of the checkpointed run state: written, read back, continued."""
+    from halfslip.io import read_checkpoint, read_result, write_run
+
+    scene = hs.parse_scene(YAML)
+    whole = hs.simulate(scene)
+    if stop_after < 0:
+        stop_after += int(whole.attrs["count_steps"])
+        assert stop_after > int(whole.segment_last_step[1]) - int(whole.segment_cycles_skipped[1]) * 40
+    polls = iter(range(10**9))
+    path = tmp_path / "run.h5"
+
+    class Writer:
+        def due(self):
+            return False
+
+        def write(self, ds, checkpoint=None):
+            write_run(ds, path, checkpoint)
+
+    partial = hs.simulate(scene, writer=Writer(), stop_requested=lambda: next(polls) >= stop_after)
+    assert partial.attrs["complete"] == 0
+    resumed = hs.simulate(scene, resume=(read_result(path), read_checkpoint(path)))
+    ignore = {"wall_time"}
+    a, b = resumed.copy(), whole.copy()
+    a.attrs = {k: v for k, v in a.attrs.items() if k not in ignore}
+    b.attrs = {k: v for k, v in b.attrs.items() if k not in ignore}
+    xr.testing.assert_identical(a, b)
