@@ -194,7 +194,7 @@ def _title(ds: xr.Dataset, what: str) -> str:
 def _cycle_table(ds: xr.Dataset) -> xr.Dataset:
     try:
         return post.cycles(ds)
-    except HalfslipInputError:  # the stored scene cannot be read: treat as acyclic
+    except HalfslipInputError:  # no segment table (a file of halfslip 0.2 or older): treat as acyclic
         return _empty_cycles()
 
 
