@@ -47,6 +47,9 @@ __all__ = [
     "window_regime",
 ]
 
+TIME_TOLERANCE = 1e-9
+"""Relative tolerance (of the cycle period) for matching window ends to stored times."""
+
 SEGMENT_DIM = "segment"
 """Dimension of the segment table of a result."""
 
@@ -324,6 +327,69 @@ def scene_windows(segments: Segments) -> list[Window]:
             repeats = 1 + int(segments.cycles_skipped[k]) if c == marched - 1 else 1
             windows.append(Window(t0, t0 + period, k, repeats))
     return windows
+
+
+def repeats_at(t: np.ndarray, segments: Segments) -> np.ndarray:
+    """Per stored step: k + 1 at the last marched step of a segment whose last k cycles were skipped, else 1."""
+    repeats = np.ones(t.size, np.int64)
+    for k, t_from, _t_to, count in segments.skipped_stretches():
+        at = np.flatnonzero(np.abs(t - t_from) <= TIME_TOLERANCE * float(segments.period[k]))
+        if at.size:
+            repeats[at[0]] = count + 1
+    return repeats
+
+
+def period_windows(t: np.ndarray, period: float, start: float | None) -> list[Window]:
+    """Windows of a user-given `period` [s]: from `start`, or whole periods counted back from the last stored step."""
+    if not np.isfinite(period) or period <= 0:
+        raise HalfslipInputError(f"the period must be a positive number of seconds, got {period!r}")
+    tol = TIME_TOLERANCE * period
+    if start is None:  # whole periods counted back from the last stored step
+        count = int(np.floor((t[-1] - t[0]) / period + TIME_TOLERANCE))
+        first = t[-1] - count * period
+    else:
+        first = float(start)
+        count = int(np.floor((t[-1] - first) / period + TIME_TOLERANCE))
+    return [Window(first + k * period, first + (k + 1) * period, -1) for k in range(count) if first + k * period >= t[0] - tol]
+
+
+def stored_windows(ds: xr.Dataset, period: float | None = None, start: float | None = None) -> list[tuple]:
+    """The cycles whose steps are stored: rows (t_start, t_stop, i_start, i_stop, segment, aligned, repeats).
+
+    Scene cycles (``period`` None) come from the segment table; a user
+    ``period`` cuts the stored time range instead (:func:`period_windows`).
+    Windows are mapped onto the stored steps by time; see
+    :func:`halfslip.post.cycles` for the rules.
+    """
+    t = np.asarray(ds["t"].values, float)
+    if period is None:
+        segments = read_segments(ds)
+        windows, spacing = scene_windows(segments), storage_spacing(ds, segments)
+        repeats = None
+    else:
+        windows, spacing = period_windows(t, float(period), start), {}
+        repeats = repeats_at(t, read_segments(ds)) if has_segments(ds) else np.ones(t.size, np.int64)
+    rows = []
+    for window in windows:
+        length = window.t_stop - window.t_start
+        tol = TIME_TOLERANCE * length
+        if window.t_start < t[0] - tol or window.t_stop > t[-1] + tol:
+            continue  # not (wholly) stored: unfinished or before the record
+        i0 = int(np.argmin(np.abs(t - window.t_start)))
+        i1 = int(np.argmin(np.abs(t - window.t_stop)))
+        if i1 <= i0:
+            continue
+        # a scene cycle is stored when no gap exceeds its storage interval; a user window, when
+        # no gap exceeds half the window (skipped cycles are never stored steps)
+        gap_limit = (spacing.get(window.segment, 0.0) if period is None else 0.5 * length) * (1 + 1e-6) + tol
+        inside = t[i0 : i1 + 1]
+        ends = (abs(inside[0] - window.t_start), abs(inside[-1] - window.t_stop))
+        if max(np.max(np.diff(inside)), 2 * max(ends)) > gap_limit:
+            continue  # steps missing (not stored)
+        aligned = max(ends) <= tol
+        count = window.repeats if repeats is None else int(repeats[i1])
+        rows.append((window.t_start, window.t_stop, i0, i1, window.segment, int(aligned), count))
+    return rows
 
 
 def storage_spacing(ds: xr.Dataset, segments: Segments) -> dict[int, float]:

@@ -75,8 +75,6 @@ __all__ = [
 REQUIRED_VARIABLES = ("P", "Q", "M", "sigma", "contact_left", "contact_right", "stick_left", "stick_right", "regime")
 """Variables every halfslip result carries (besides the coordinate ``t``)."""
 
-_TIME_TOLERANCE = 1e-9
-"""Relative tolerance (of the cycle period) for matching window ends to stored times."""
 
 
 def _attrs(units: str, long_name: str, **extra) -> dict:
@@ -185,33 +183,14 @@ def timeline(ds: xr.Dataset, strict: bool = True) -> Timeline:
     `strict` a result without one gives the plain times (no cycles, no skips).
     """
     t = np.asarray(ds["t"].values, float)
-    repeats = np.ones(t.size, np.int64)
     try:
         segments = _cycles.read_segments(ds)
     except HalfslipInputError:
         if strict:
             raise
-        return Timeline(t, t, repeats, [], {})
-    windows = _cycles.scene_windows(segments)
-    for k, t_from, _t_to, count in segments.skipped_stretches():
-        period = float(segments.period[k])
-        at = np.flatnonzero(np.abs(t - t_from) <= _TIME_TOLERANCE * period)
-        if at.size:
-            repeats[at[0]] = count + 1
-    return Timeline(t, t, repeats, windows, _cycles.storage_spacing(ds, segments))
-
-
-def _period_windows(t: np.ndarray, period: float, start: float | None) -> list[_cycles.Window]:
-    if not np.isfinite(period) or period <= 0:
-        raise HalfslipInputError(f"the period must be a positive number of seconds, got {period!r}")
-    tol = _TIME_TOLERANCE * period
-    if start is None:  # whole periods counted back from the last stored step
-        count = int(np.floor((t[-1] - t[0]) / period + _TIME_TOLERANCE))
-        first = t[-1] - count * period
-    else:
-        first = float(start)
-        count = int(np.floor((t[-1] - first) / period + _TIME_TOLERANCE))
-    return [_cycles.Window(first + k * period, first + (k + 1) * period, -1) for k in range(count) if first + k * period >= t[0] - tol]
+        return Timeline(t, t, np.ones(t.size, np.int64), [], {})
+    return Timeline(t, t, _cycles.repeats_at(t, segments), _cycles.scene_windows(segments),
+                    _cycles.storage_spacing(ds, segments))
 
 
 def cycles(ds: xr.Dataset, period: float | None = None, start: float | None = None) -> xr.Dataset:
@@ -249,32 +228,7 @@ def cycles(ds: xr.Dataset, period: float | None = None, start: float | None = No
     (``repeats``).
     """
     check_result(ds)
-    line = timeline(ds, strict=period is None)
-    t_eff = line.t_eff
-    if period is None:
-        windows = line.windows
-    else:
-        windows = _period_windows(t_eff, float(period), start)
-    rows = []
-    for window in windows:
-        length = window.t_stop - window.t_start
-        tol = _TIME_TOLERANCE * length
-        if window.t_start < t_eff[0] - tol or window.t_stop > t_eff[-1] + tol:
-            continue  # not (wholly) stored: unfinished or before the record
-        i0 = int(np.argmin(np.abs(t_eff - window.t_start)))
-        i1 = int(np.argmin(np.abs(t_eff - window.t_stop)))
-        if i1 <= i0:
-            continue
-        # a scene cycle is stored when no gap exceeds its storage interval; a user window, when
-        # no gap exceeds half the window (skipped cycles are never stored steps)
-        gap_limit = (line.spacing.get(window.segment, 0.0) if period is None else 0.5 * length) * (1 + 1e-6) + tol
-        inside = t_eff[i0 : i1 + 1]
-        ends = (abs(inside[0] - window.t_start), abs(inside[-1] - window.t_stop))
-        if max(np.max(np.diff(inside)), 2 * max(ends)) > gap_limit:
-            continue  # steps missing (skipped as repeats, or not stored)
-        aligned = max(ends) <= tol
-        repeats = window.repeats if period is None else int(line.repeats[i1])
-        rows.append((window.t_start, window.t_stop, i0, i1, window.segment, int(aligned), repeats))
+    rows = _cycles.stored_windows(ds, period, start)
     columns = list(zip(*rows)) if rows else [[]] * 7
     source = "scene cycles segments" if period is None else f"period {float(period):g} s"
     out = xr.Dataset(
@@ -288,7 +242,7 @@ def cycles(ds: xr.Dataset, period: float | None = None, start: float | None = No
             "repeats": ("cycle", np.asarray(columns[6], np.int64), _attrs("1", "cycles of the scene this entry stands for")),
         },
         coords={"cycle": ("cycle", np.arange(len(rows)), _attrs("1", "cycle number"))},
-        attrs={"source": source, "skipped_cycles": int(np.sum(line.repeats - 1))},
+        attrs={"source": source, "skipped_cycles": int(np.sum(timeline(ds, strict=False).repeats - 1))},
     )
     return out
 
