@@ -246,3 +246,28 @@ def test_an_interrupted_run_with_skipped_cycles_resumes_to_the_same_file(tmp_pat
     a.attrs = {k: v for k, v in a.attrs.items() if k not in ignore}
     b.attrs = {k: v for k, v in b.attrs.items() if k not in ignore}
     xr.testing.assert_identical(a, b)
+
+
+def test_a_checkpoint_whose_skipper_state_does_not_fit_is_refused(tmp_path):
+    from halfslip.io import read_checkpoint, read_result, write_run
+
+    scene = hs.parse_scene(YAML)
+    path = tmp_path / "run.h5"
+    polls = iter(range(10**9))
+
+    class Writer:
+        def due(self):
+            return False
+
+        def write(self, ds, checkpoint=None):
+            write_run(ds, path, checkpoint)
+
+    hs.simulate(scene, writer=Writer(), stop_requested=lambda: next(polls) >= 100)
+    ds, checkpoint = read_result(path), read_checkpoint(path)
+    assert checkpoint["skipper"]["previous"]  # a cycle end was seen: there is a state to tamper with
+    for tampered in ({**checkpoint["skipper"], "previous": {99: checkpoint["state"]}},
+                     {**checkpoint["skipper"], "previous": {1: 1.5}},
+                     {**checkpoint["skipper"], "skipped": [1, 2]}):
+        with pytest.raises(hs.HalfslipInputError, match="checkpoint does not fit"):
+            hs.simulate(scene, resume=(ds, {**checkpoint, "skipper": tampered}))
+    assert hs.simulate(scene, resume=(ds, checkpoint)).attrs["complete"] == 1

@@ -505,9 +505,14 @@ class _Run:
         skipper = checkpoint["skipper"]
         if skipper is not None:
             try:
-                SkipState.from_tree(skipper)
+                skip = SkipState.from_tree(skipper)
             except (TypeError, ValueError, KeyError, AttributeError):
                 return "its cycle skipper state is malformed"
+            segments = range(len(self.scene.history.segments))
+            if not all(k in segments for k in (*skip.previous, *skip.skipped, *skip.traces)):
+                return "its cycle skipper names segments this history does not have"
+            if not all(isinstance(s, ContactState) and isinstance(s.memory, memory_type) for s in skip.previous.values()):
+                return f"its cycle skipper holds states that are not {memory_type.__name__} states"
         if int(ds.sizes.get("t", 0)) > i + 1:
             return "the file stores more steps than the checkpoint has marched"
         return None
