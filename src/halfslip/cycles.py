@@ -38,12 +38,19 @@ from .state import ContactState
 __all__ = [
     "CycleSkipper",
     "SEGMENT_DIM",
+    "SEGMENT_KINDS",
     "Segments",
+    "Skip",
     "SkipState",
     "Window",
+    "has_segments",
+    "period_windows",
     "read_segments",
+    "repeats_at",
+    "scene_windows",
     "segment_table",
     "stick_intersection",
+    "stored_windows",
     "window_regime",
 ]
 
