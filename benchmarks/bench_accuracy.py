@@ -219,7 +219,7 @@ def measure(sc, known, method, nodes, reference=None) -> dict:
         out["note"] = (f"edge error over all steps: median {np.nanmedian(deviation):.1e}, "
                        f"95th percentile {np.nanpercentile(deviation, 95):.1e}; regime differs at "
                        f"{int(np.count_nonzero(ds.regime.values != reference.regime.values))} of {ds.sizes['t']} steps")
-        out["D"] = float(ds.dissipation[-1])
+        out["D"] = float(ds.final_dissipation)
         if "q" in ds and "q" in reference:
             diff = ds.q.values - reference.q.values
             out["q"] = float(np.sqrt(np.sum(diff**2) / np.sum(reference.q.values ** 2)))
@@ -256,7 +256,7 @@ def main() -> None:
                      "note": f"failed: {type(error).__name__}: {error}"[:120]}
             results.append((method, nodes, m))
         # dissipation: against the exact method (or its reference run), else the finest general run
-        D_ref = float(reference.dissipation[-1]) if reference is not None else next(
+        D_ref = float(reference.final_dissipation) if reference is not None else next(
             (m["D"] for method, _, m in results if method == "exact"), results[-1][2]["D"])
         for method, nodes, m in results:
             finest = method == "general" and nodes == resolutions[-1] and not any(r[0] == "exact" for r in results)

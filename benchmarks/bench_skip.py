@@ -76,7 +76,7 @@ def main() -> None:
         ]
         for name, (ds, wall, left, right, per) in results.items():
             lines.append(f"| {name} | {wall:.3g} | {ds.attrs['count_steps']} | {ds.attrs['skipped_cycles']} | "
-                         f"[{left:.9g}, {right:.9g}] | {per:.9g} | {float(ds.dissipation[-1]):.6g} |")
+                         f"[{left:.9g}, {right:.9g}] | {per:.9g} | {float(ds.final_dissipation):.6g} |")
         lines += [
             "",
             f"Ratio of wall times ({args.cycles} cycles / 5 cycles): **{tn / t5:.2f}**.",

@@ -15,33 +15,19 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from halfslip.geometry import Hertz, NormalProblem, RoundedPunch
 from halfslip.solvers.exact import ExactMemory
 from halfslip.state import Loads, Regime
 
-A = 4 * (1 - 0.3**2) / 200e9
-F = 0.6
-P0 = 1.0e5
-
-PROFILES = {
-    "hertz": Hertz(radius=50e-3),
-    "punch": RoundedPunch(flat_half_width=0.2e-3, radius=10e-3),
-}
+import helpers
+from helpers import A, F, P0, PROFILES
 
 
-def march(method, path, state=None):
-    """Step ``method`` through the (P, Q) points of ``path``; return the states."""
-    state = state if state is not None else method.initial_state()
-    states = []
-    for i, (P, Q) in enumerate(path):
-        state, _ = method.step(state, float(i + 1), Loads(P, Q, 0.0, 0.0))
-        states.append(state)
-    return states
+
+march = helpers.states  # the states of stepping through (P, Q) points
 
 
 def make(kind, P_max=P0, stations=None):
-    problem = NormalProblem(PROFILES[kind], A)
-    return problem, ExactMemory(problem, F, P_max, stations=stations)
+    return helpers.make(kind, "exact", P_max=P_max, stations=stations)
 
 
 def rel_err(a, b):

@@ -19,31 +19,18 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from halfslip.geometry import Hertz, NormalProblem, RoundedPunch
+from halfslip.geometry import NormalProblem
 from halfslip.solvers.exact import ExactMemory
 from halfslip.solvers.general import GeneralSolver
 from halfslip.state import Loads, Regime
 
-A = 4 * (1 - 0.3**2) / 200e9
-F = 0.6
-P0 = 1.0e5
-R = 50e-3
-
-PROFILES = {
-    "hertz": Hertz(radius=R),
-    "punch": RoundedPunch(flat_half_width=0.2e-3, radius=10e-3),
-}
+import helpers
+from helpers import A, F, P0, PROFILES
+from helpers import R_HERTZ as R
 
 
-def march(solver, path, state=None, t0=0.0):
-    """Step through ``path`` (tuples of loads); return the list of (state, report)."""
-    state = state if state is not None else solver.initial_state()
-    out = []
-    for i, loads in enumerate(path):
-        loads = tuple(loads) + (0.0,) * (4 - len(loads))
-        state, report = solver.step(state, t0 + i + 1.0, Loads(*loads))
-        out.append((state, report))
-    return out
+
+march = helpers.march
 
 
 def l2(a, b):
@@ -51,8 +38,7 @@ def l2(a, b):
 
 
 def make(kind, nodes=256, **kw):
-    problem = NormalProblem(PROFILES[kind], A)
-    return problem, GeneralSolver(problem, F, nodes, **kw)
+    return helpers.make(kind, "general", nodes=nodes, **kw)
 
 
 # ---------------------------------------------------------------------------

@@ -104,9 +104,13 @@ def test_cycle_skipping_matches_full_marching():
     assert full.attrs["skipped_cycles"] == 0
     assert skipped.attrs["skipped_cycles"] >= 25
     assert skipped.attrs["count_steps"] < full.attrs["count_steps"] / 5
-    for name in ("t", "stick_left", "stick_right", "rigid_shift", "contact_right"):
+    # the last stored step is the last marched one; the final state is that state (the cycle repeats)
+    # at final_t, with final_dissipation
+    assert float(skipped.final_t) == pytest.approx(float(full.t[-1]), rel=1e-12)
+    for name in ("stick_left", "stick_right", "rigid_shift", "contact_right"):
         assert float(skipped[name][-1]) == pytest.approx(float(full[name][-1]), rel=1e-12)
-    assert float(skipped.dissipation[-1]) == pytest.approx(float(full.dissipation[-1]), rel=1e-12)
+    assert float(skipped.final_dissipation) == pytest.approx(float(full.dissipation[-1]), rel=1e-12)
+    assert float(full.final_dissipation) == float(full.dissipation[-1])
 
 
 def test_counters_constant_P_one_normal_solve_and_full_stick_no_slip_solve():
@@ -197,7 +201,7 @@ def test_general_solver_skips_steady_cycles_like_full_marching():
     d_skip = post.dissipation_per_cycle(skipped).dissipation.values
     d_full = post.dissipation_per_cycle(full).dissipation.values
     assert d_skip[-1] == pytest.approx(d_full[-1], rel=1e-2)
-    assert float(skipped.dissipation[-1]) == pytest.approx(float(full.dissipation[-1]), rel=1e-2)
+    assert float(skipped.final_dissipation) == pytest.approx(float(full.dissipation[-1]), rel=1e-2)
 
 
 def test_general_state_difference_tells_a_first_cycle_from_a_steady_one():

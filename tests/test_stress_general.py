@@ -38,12 +38,10 @@ from halfslip.solvers import _general_points as points
 from halfslip.solvers.general import COULOMB_TOL, SINGULAR_LEFT, GeneralSolver
 from halfslip.state import GROSS_SLIDING_MESSAGE, Loads, Regime
 
-A = 4 * (1 - 0.3**2) / 200e9
-F = 0.6
+import helpers
+from helpers import A, F
 P0 = 1.0e5
-R_HERTZ = 50e-3
-W_FLAT = 0.2e-3
-R_CORNER = 10e-3
+from helpers import R_CORNER, R_HERTZ, W_FLAT
 EPS = float(np.finfo(float).eps)
 
 # --- invariant tolerances -----------------------------------------------------
@@ -87,8 +85,7 @@ def punch_problem(w=W_FLAT, radius=R_CORNER, compliance=A):
 
 
 def make(kind, nodes=128):
-    problem = hertz_problem() if kind == "hertz" else punch_problem()
-    return problem, GeneralSolver(problem, F, nodes)
+    return helpers.make(kind, "general", nodes=nodes)
 
 
 def breaks_of(problem):
@@ -185,15 +182,8 @@ def check_step(solver, prev, state, report, clean=True):
 def walk(solver, path, state=None, clean=True):
     """Step through ``path`` (tuples of up to four loads), checking every step; return [(state, report)]."""
     state = solver.initial_state() if state is None else state
-    t0 = state.t
-    out = []
-    for i, loads in enumerate(path):
-        loads = tuple(loads) + (0.0,) * (4 - len(loads))
-        prev = state
-        state, report = solver.step(state, t0 + i + 1.0, Loads(*loads))
-        check_step(solver, prev, state, report, clean)
-        out.append((state, report))
-    return out
+    return helpers.march(solver, path, state, t0=state.t,
+                         check=lambda prev, new, report: check_step(solver, prev, new, report, clean))
 
 
 def strain_on(memory, x):

@@ -269,7 +269,7 @@ def test_an_invalid_value_fails_its_cases_only(tmp_path, grid_serial):
 
 
 def test_a_case_that_raises_at_run_time_is_recorded_and_the_rest_go_on(tmp_path, monkeypatch):
-    sweep_module = sys.modules["halfslip.sweep"]  # `halfslip.sweep` itself is the function
+    sweep_module = sys.modules["halfslip.sweep.run"]  # where run_case looks solve_case up (`halfslip.sweep` is the function)
 
     real = sweep_module.solve_case
 

@@ -427,7 +427,8 @@ def summarize(result, path) -> list[str]:
         energy = post.dissipation_per_cycle(result)["dissipation"].values
         first = f", first cycle {quantity(energy[0], 'J/m')}" if energy.size > 1 else ""
         lines.append(f"  dissipation per cycle {quantity(energy[-1], 'J/m')} (last full cycle){first}")
-    lines.append(f"  dissipated {quantity(float(last.dissipation), 'J/m')} in total")
+    total = result["final_dissipation"] if "final_dissipation" in result else last.dissipation  # skipped cycles too
+    lines.append(f"  dissipated {quantity(float(total), 'J/m')} in total")
     failed = int(result.attrs.get("count_failed_steps", 0))
     if failed and "converged" in result:
         bad = result["converged"].values == 0

@@ -52,6 +52,7 @@ from .errors import (
     suggest,
 )
 from .io import PATH_CHARS, read_input_text
+from .state import frozen
 
 LOADS = ("P", "Q", "M", "sigma")
 """Names of the four loads, in the order used everywhere."""
@@ -756,9 +757,7 @@ def _parse_cell(cell: str) -> float | str:
 
 def _frozen(values: ArrayLike) -> np.ndarray:
     """Return a read-only float copy of `values`."""
-    array = np.array(values, dtype=float)
-    array.flags.writeable = False
-    return array
+    return frozen(np.array(values, dtype=float))
 
 
 def _close(a: float, b: float, scale: float) -> bool:

@@ -135,8 +135,9 @@ class MessageLog:
     def variables(self) -> dict:
         """The result variables along the dimension ``message``."""
         step, t, kind, value, text = zip(*self.records) if self.records else ((),) * 5
-        kinds = np.array(kind, dtype=object) if kind else np.zeros(0, dtype=object)
-        texts = np.array(text, dtype=object) if text else np.zeros(0, dtype=object)
+        # an empty object array would be written as numbers: empty text columns are typed as text
+        kinds = np.array(kind, dtype=object) if kind else np.zeros(0, dtype=str)
+        texts = np.array(text, dtype=object) if text else np.zeros(0, dtype=str)
         counts = np.array([self.counts[k] for k in kind], dtype=np.int64)
         return {
             "message_step": ("message", np.array(step, dtype=np.int64),

@@ -54,7 +54,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.ticker import MaxNLocator, ScalarFormatter
 
-from . import post
+from . import cycles, post
 from .errors import HalfslipInputError
 from .si import unit_scale  # noqa: F401  (public here since 0.1: every figure's axes use it)
 
@@ -157,7 +157,7 @@ def _title(ds: xr.Dataset, what: str) -> str:
 def _cycle_table(ds: xr.Dataset) -> xr.Dataset:
     try:
         return post.cycles(ds)
-    except HalfslipInputError:  # the stored scene cannot be read: treat as acyclic
+    except HalfslipInputError:  # no segment table (a file of halfslip 0.2 or older): treat as acyclic
         return _empty_cycles()
 
 
@@ -166,13 +166,19 @@ def _empty_cycles() -> xr.Dataset:
 
 
 def _nearest_steps(ds: xr.Dataset, times) -> list[int]:
+    """Stored steps nearest to the given times; a time inside skipped cycles is the same phase of the
+    last marched cycle, which they repeat (:meth:`halfslip.cycles.Segments.marched_time`)."""
     t = ds["t"].values
+    end = max(float(t[-1]), float(ds["final_t"])) if "final_t" in ds else float(t[-1])
+    segments = cycles.read_segments(ds) if cycles.has_segments(ds) else None
     indices = []
     for time in times:
         time = float(time)
-        span = t[-1] - t[0]
-        if not (t[0] - 1e-9 * span <= time <= t[-1] + 1e-9 * span):
-            raise HalfslipInputError(f"time {time:g} s lies outside the run (t = {t[0]:g} .. {t[-1]:g} s)", field="--at")
+        span = end - t[0]
+        if not (t[0] - 1e-9 * span <= time <= end + 1e-9 * span):
+            raise HalfslipInputError(f"time {time:g} s lies outside the run (t = {t[0]:g} .. {end:g} s)", field="--at")
+        if segments is not None:
+            time = segments.marched_time(time)
         indices.append(int(np.argmin(np.abs(t - time))))
     return indices
 
@@ -252,21 +258,25 @@ BAND = 0.04
 
 
 def _time_axis(ds: xr.Dataset) -> _TimeAxis:
-    line = post.timeline(ds, strict=False)
-    t, t_eff = line.t, line.t_eff
-    skips = [int(i) for i in np.flatnonzero(line.repeats > 1) if t[i] > t_eff[i]]
-    marched = (t[-1] - t[0]) - sum(t[i] - t_eff[i] for i in skips)
+    """The drawn time axis: from the first stored step to the run's last state (``final_t``),
+    each stretch of skipped cycles (the segment table) a thin band."""
+    t = np.asarray(ds["t"].values, float)
+    end = max(float(t[-1]), float(ds["final_t"])) if "final_t" in ds else float(t[-1])
+    try:
+        skips = cycles.read_segments(ds).skipped_stretches()
+    except HalfslipInputError:
+        skips = []
+    marched = (end - t[0]) - sum(b - a for _k, a, b, _n in skips)
     width = BAND * marched if marched > 0 else 0.0
     real, shown, bands, offset = [t[0]], [t[0]], [], 0.0
-    for i in skips:
-        a, b = float(t_eff[i]), float(t[i])
+    for _k, a, b, count in skips:
         w = min(b - a, width)
         real += [a, b]
         shown += [a - offset, a - offset + w]
-        bands.append((a - offset, a - offset + w, int(line.repeats[i]) - 1))
+        bands.append((a - offset, a - offset + w, count))
         offset += (b - a) - w
-    real.append(t[-1])
-    shown.append(t[-1] - offset)
+    real.append(end)
+    shown.append(end - offset)
     return _TimeAxis(np.asarray(real, float), np.asarray(shown, float), tuple(bands))
 
 
@@ -390,10 +400,9 @@ def _map_layout(ds: xr.Dataset):
     table = _cycle_table(ds)
     if not table.sizes["cycle"]:
         return table, None, None, 1
-    line = post.timeline(ds, strict=False)
     k0 = max(0, table.sizes["cycle"] - 2)
     i0, i1 = int(table["i_start"][k0]), int(table["i_stop"][-1])
-    window = ds.isel(t=slice(i0, i1 + 1)).assign_coords(t=("t", line.t_eff[i0 : i1 + 1]))
+    window = ds.isel(t=slice(i0, i1 + 1))
     bands = _slip_bands(window)
     return table, window, bands, 3 if bands is not None else 2
 

@@ -14,8 +14,8 @@ imported::
 Cycles
 ------
 A cycle is a time window [t_start, t_stop]. By default the windows are the
-periods of the scene's ``cycles`` segments (read from the ``scene``
-attribute); a user-given ``period`` cuts the run instead into whole periods
+periods of the history's ``cycles`` segments (read from the result's segment
+table, :mod:`halfslip.cycles`; never from the scene text); a user-given ``period`` cuts the run instead into whole periods
 counted back from its last stored step. Windows are mapped onto the stored
 steps *by time*, so results stored every n-th step (``output.every``) work; a
 window whose ends are not stored steps is taken between the nearest stored
@@ -23,10 +23,12 @@ steps and flagged ``aligned = 0``. Only windows that lie wholly inside the
 stored time range are listed (an interrupted run loses its unfinished cycle).
 
 Cycles skipped by the simulator (``solver.skip_steady_cycles``: once a cycle
-repeats, time jumps to the segment's end) are not listed; the last marched
-cycle stands for them (``repeats`` = 1 + the number skipped), its energy is
-given per cycle, and its last stored step -- stored with the segment's end
-time -- gets back the time it ends the marched cycle at.
+repeats, the run goes on from the segment's end) are never stored steps and
+are not listed; the last marched cycle stands for them (``repeats`` = 1 + the
+number skipped). The segment table says what was skipped
+(``segment_cycles_skipped``, ``segment_skip_t_start``,
+``segment_skip_dissipation``); ``final_t`` and ``final_dissipation`` give the
+run's last state.
 
 Functions taking ``cycle`` accept an index into that list (negative from the
 end, default -1: the last full cycle) or ``None`` for the whole run.
@@ -45,6 +47,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
+from . import cycles as _cycles
 from .errors import HalfslipInputError
 
 __all__ = [
@@ -72,8 +75,6 @@ __all__ = [
 REQUIRED_VARIABLES = ("P", "Q", "M", "sigma", "contact_left", "contact_right", "stick_left", "stick_right", "regime")
 """Variables every halfslip result carries (besides the coordinate ``t``)."""
 
-_TIME_TOLERANCE = 1e-9
-"""Relative tolerance (of the cycle period) for matching window ends to stored times."""
 
 
 def _attrs(units: str, long_name: str, **extra) -> dict:
@@ -148,10 +149,10 @@ def result_kind(ds: xr.Dataset) -> str | None:
 
 
 def friction(ds: xr.Dataset) -> float:
-    """The Coulomb friction coefficient f of a run (attribute ``friction``, else from its scene)."""
-    if "friction" in ds.attrs:
-        return float(ds.attrs["friction"])
-    return float(_scene(ds).friction)
+    """The Coulomb friction coefficient f of a run (attribute ``friction``)."""
+    if "friction" not in ds.attrs:
+        raise HalfslipInputError("the result lacks its 'friction' attribute")
+    return float(ds.attrs["friction"])
 
 
 # ---------------------------------------------------------------------------
@@ -159,134 +160,37 @@ def friction(ds: xr.Dataset) -> float:
 
 
 @dataclass(frozen=True)
-class _Window:
-    t_start: float
-    t_stop: float
-    segment: int
-
-
-def _scene(ds: xr.Dataset):
-    """The scene of a run, parsed from its ``scene`` attribute.
-
-    Files named in the scene (profile and load tables) are looked for next to
-    the result file and in the working directory; when the profile file is
-    missing the geometry is replaced by a stand-in, which leaves the load
-    history (all that cycles need) unchanged.
-    """
-    from pathlib import Path
-
-    from .scene import parse_scene
-
-    text = str(ds.attrs["scene"])
-    bases = []
-    source = ds.encoding.get("source")
-    if source:
-        bases.append(Path(source).parent)
-    bases.append(Path.cwd())
-    error: Exception | None = None
-    for candidate in (text, _without_geometry_files(text)):
-        if candidate is None:
-            continue
-        for base in bases:
-            try:
-                return parse_scene(candidate, base_dir=base)
-            except HalfslipInputError as caught:
-                error = caught
-    raise HalfslipInputError(f"cannot read the scene stored in the result: {error}")
-
-
-def _without_geometry_files(text: str) -> str | None:
-    """The scene text with its geometry replaced by a unit Hertz cylinder (None if not possible)."""
-    import yaml
-
-    try:
-        root = yaml.compose(text, Loader=yaml.SafeLoader)
-    except yaml.YAMLError:
-        return None
-    if not isinstance(root, yaml.MappingNode):
-        return None
-    stand_in = yaml.compose("{kind: hertz, radius: 1.0}", Loader=yaml.SafeLoader)
-    for index, (key, _value) in enumerate(root.value):
-        if getattr(key, "value", None) == "geometry":
-            root.value[index] = (key, stand_in)
-            return yaml.serialize(root)
-    return None
-
-
-def _skipped_per_segment(ds: xr.Dataset) -> dict[int, int]:
-    """Cycles skipped by the simulator in each segment (attribute ``skipped_cycles_per_segment``)."""
-    import re
-
-    text = str(ds.attrs.get("skipped_cycles_per_segment", ""))
-    return {int(k): int(v) for k, v in re.findall(r"loads\[(\d+)\]:\s*(\d+)", text)}
-
-
-@dataclass(frozen=True)
 class Timeline:
-    """The stored times, with skipped cycles taken out.
+    """The stored times of a run and the cycles its segment table lists.
 
-    When the simulator skips the last ``k`` cycles of a steady segment it stores
-    the state that ends the last marched cycle at the segment's end time. Here
-    that sample gets back the time it ends the marched cycle at (``t_eff``), and
-    ``repeats[i]`` = k + 1 says how many cycles of the scene the step into
-    sample i stands for.
+    Every stored time is the time of a marched step (halfslip 0.3), so
+    ``t_eff`` is ``t``; it stays for code written against 0.2. ``repeats[i]``
+    = k + 1 at the last marched step of a segment whose last k cycles were
+    skipped as repeats of the cycle ending there, else 1.
     """
 
     t: np.ndarray
     t_eff: np.ndarray
     repeats: np.ndarray
     windows: list
-    spacing: dict  # segment index -> longest regular gap between stored steps [s]
+    spacing: dict  # segment index -> regular gap between stored steps [s]
 
 
 def timeline(ds: xr.Dataset, strict: bool = True) -> Timeline:
-    """The stored times of a run with its skipped cycles located (:class:`Timeline`).
+    """The stored times of a run with its cycles and skipped cycles (:class:`Timeline`).
 
-    Without `strict` an unreadable scene gives the plain times (no cycles, no skips).
+    Read from the result's segment table (:mod:`halfslip.cycles`). Without
+    `strict` a result without one gives the plain times (no cycles, no skips).
     """
     t = np.asarray(ds["t"].values, float)
-    t_eff = t.copy()
-    repeats = np.ones(t.size, np.int64)
-    windows: list[_Window] = []
-    spacing: dict[int, float] = {}
     try:
-        scene = _scene(ds)
+        segments = _cycles.read_segments(ds)
     except HalfslipInputError:
         if strict:
             raise
-        scene = None
-    if scene is not None:
-        skipped = _skipped_per_segment(ds)
-        every = int(scene.output.every)
-        for index, segment in enumerate(scene.history.segments):
-            if segment.kind != "cycles":
-                continue
-            period = float(segment.period)
-            spacing[index] = every * period / int(segment.steps_per_cycle)
-            k = skipped.get(index, 0)
-            if k:
-                tol = _TIME_TOLERANCE * period
-                end = np.flatnonzero(np.abs(t - segment.t_stop) <= tol)
-                if end.size and end[0] > 0 and t[end[0] - 1] <= segment.t_stop - k * period + tol:
-                    t_eff[end[0]] = segment.t_stop - k * period
-                    repeats[end[0]] = k + 1
-            for c in range(int(segment.count)):
-                t0 = segment.t_start + c * period
-                windows.append(_Window(t0, t0 + period, index))
-    return Timeline(t, t_eff, repeats, windows, spacing)
-
-
-def _period_windows(t: np.ndarray, period: float, start: float | None) -> list[_Window]:
-    if not np.isfinite(period) or period <= 0:
-        raise HalfslipInputError(f"the period must be a positive number of seconds, got {period!r}")
-    tol = _TIME_TOLERANCE * period
-    if start is None:  # whole periods counted back from the last stored step
-        count = int(np.floor((t[-1] - t[0]) / period + _TIME_TOLERANCE))
-        first = t[-1] - count * period
-    else:
-        first = float(start)
-        count = int(np.floor((t[-1] - first) / period + _TIME_TOLERANCE))
-    return [_Window(first + k * period, first + (k + 1) * period, -1) for k in range(count) if first + k * period >= t[0] - tol]
+        return Timeline(t, t, np.ones(t.size, np.int64), [], {})
+    return Timeline(t, t, _cycles.repeats_at(t, segments), _cycles.scene_windows(segments),
+                    _cycles.storage_spacing(ds, segments))
 
 
 def cycles(ds: xr.Dataset, period: float | None = None, start: float | None = None) -> xr.Dataset:
@@ -318,38 +222,13 @@ def cycles(ds: xr.Dataset, period: float | None = None, start: float | None = No
     Notes
     -----
     A window counts as stored when the stored steps cover it without a gap
-    longer than the segment's storage interval (``output.every`` steps), so
-    cycles skipped by ``solver.skip_steady_cycles`` are not listed: the entry
-    of the last marched cycle stands for them (``repeats``). Its last stored
-    step carries the segment's end time in ``ds.t``; :func:`select_cycle`
-    gives it back the time it ends the marched cycle at.
+    longer than the segment's storage interval (``output.every`` steps, the
+    attribute ``output_every``). Cycles skipped by ``solver.skip_steady_cycles``
+    are not listed: the entry of the last marched cycle stands for them
+    (``repeats``).
     """
     check_result(ds)
-    line = timeline(ds, strict=period is None)
-    t_eff = line.t_eff
-    if period is None:
-        windows = line.windows
-    else:
-        windows = _period_windows(t_eff, float(period), start)
-    rows = []
-    for window in windows:
-        length = window.t_stop - window.t_start
-        tol = _TIME_TOLERANCE * length
-        if window.t_start < t_eff[0] - tol or window.t_stop > t_eff[-1] + tol:
-            continue  # not (wholly) stored: unfinished or before the record
-        i0 = int(np.argmin(np.abs(t_eff - window.t_start)))
-        i1 = int(np.argmin(np.abs(t_eff - window.t_stop)))
-        if i1 <= i0:
-            continue
-        # a scene cycle is stored when no gap exceeds its storage interval; a user window, when
-        # no gap exceeds half the window (skipped cycles are already out of t_eff)
-        gap_limit = (line.spacing.get(window.segment, 0.0) if period is None else 0.5 * length) * (1 + 1e-6) + tol
-        inside = t_eff[i0 : i1 + 1]
-        ends = (abs(inside[0] - window.t_start), abs(inside[-1] - window.t_stop))
-        if max(np.max(np.diff(inside)), 2 * max(ends)) > gap_limit:
-            continue  # steps missing (skipped as repeats, or not stored)
-        aligned = max(ends) <= tol
-        rows.append((window.t_start, window.t_stop, i0, i1, window.segment, int(aligned), int(line.repeats[i1])))
+    rows = _cycles.stored_windows(ds, period, start)
     columns = list(zip(*rows)) if rows else [[]] * 7
     source = "scene cycles segments" if period is None else f"period {float(period):g} s"
     out = xr.Dataset(
@@ -363,7 +242,7 @@ def cycles(ds: xr.Dataset, period: float | None = None, start: float | None = No
             "repeats": ("cycle", np.asarray(columns[6], np.int64), _attrs("1", "cycles of the scene this entry stands for")),
         },
         coords={"cycle": ("cycle", np.arange(len(rows)), _attrs("1", "cycle number"))},
-        attrs={"source": source, "skipped_cycles": int(np.sum(line.repeats - 1))},
+        attrs={"source": source, "skipped_cycles": int(np.sum(timeline(ds, strict=False).repeats - 1))},
     )
     return out
 
@@ -403,16 +282,11 @@ def select_cycle(ds: xr.Dataset, cycle: int | None = -1, period: float | None = 
     Returns
     -------
     xarray.Dataset
-        The steps of the cycle; a last step stored at the end of a segment
-        whose steady cycles were skipped gets back the time it ends this
-        cycle at. Attribute ``selection`` names the cycle.
+        The steps of the cycle. Attribute ``selection`` names the cycle.
     """
     check_result(ds)
     i0, i1, label = _cycle_window(ds, cycle, period)
     out = ds.isel(t=slice(i0, i1 + 1))
-    if cycle is not None:
-        t_eff = timeline(ds, strict=False).t_eff[i0 : i1 + 1]
-        out = out.assign_coords(t=("t", t_eff, dict(ds["t"].attrs)))
     out.attrs = {**ds.attrs, "selection": label}
     return out
 
@@ -504,8 +378,9 @@ def dissipation_per_cycle(ds: xr.Dataset, period: float | None = None) -> xr.Dat
     table = cycles(ds, period=period)
     D = ds["dissipation"].values
     i0, i1 = table["i_start"].values, table["i_stop"].values
-    # a cycle standing for k + 1 (the k skipped ones repeat it) carries their energy too
-    per_cycle = (D[i1] - D[i0]) / table["repeats"].values
+    # every stored step is a marched one: a cycle's energy is the difference across it, also for
+    # the last marched cycle that k skipped ones repeat (their energy is segment_skip_dissipation)
+    per_cycle = D[i1] - D[i0]
     out = xr.Dataset(
         {
             "dissipation": ("cycle", per_cycle, _attrs("J/m", "frictional energy dissipated in the cycle")),
@@ -568,10 +443,9 @@ def hysteresis_loops(ds: xr.Dataset, period: float | None = None) -> xr.Dataset:
     table = cycles(ds, period=period)
     i0, i1 = table["i_start"].values, table["i_stop"].values
     length = int(np.max(i1 - i0) + 1) if len(i0) else 0
-    t_eff = timeline(ds, strict=False).t_eff
     data = {}
     for name in ("Q", "shift", "P", "t"):
-        values = t_eff if name == "t" else ds[_variable(ds, name)].values
+        values = ds[_variable(ds, name)].values
         block = np.full((len(i0), length), np.nan)
         for row, (a, b) in enumerate(zip(i0, i1)):
             block[row, : b - a + 1] = values[a : b + 1]
@@ -694,10 +568,7 @@ def permanent_stick(ds: xr.Dataset, cycle: int | None = -1, period: float | None
     """
     check_result(ds)
     window = select_cycle(ds, cycle, period)
-    left_all, right_all = window["stick_left"].values, window["stick_right"].values
-    left, right = float(np.max(left_all)), float(np.min(right_all))
-    if not (np.all(np.isfinite(left_all)) and np.all(np.isfinite(right_all))) or left > right:
-        left = right = float("nan")
+    left, right = _cycles.stick_intersection(window["stick_left"].values, window["stick_right"].values)
     return xr.Dataset(
         {
             "left": ((), left, _attrs("m", "left edge of the permanent stick zone")),

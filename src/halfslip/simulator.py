@@ -15,15 +15,14 @@ from typing import Callable
 import numpy as np
 import xarray as xr
 
+from . import variables
+from .cycles import CycleSkipper, SkipState, describe_skips, segment_table
 from .geometry import NormalProblem
 from .messages import MessageLog, checkpoint_problem
 from .progress import progress_for
-from .scene import check_run_bytes
+from .scene import FIELDS, METHODS, check_run_bytes  # FIELDS, METHODS: defined once, in scene.py
 from .solvers.base import STATION_STATES
 from .state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime
-
-METHODS = ("auto", "exact", "general")
-FIELDS = ("p", "q", "slip")
 CHUNK = 4096  # steps per call of a compiled marcher
 
 
@@ -129,7 +128,10 @@ def slip_zone_spacings(ds: xr.Dataset, nodes: int) -> float:
 
 
 def _dtype(name: str):
-    """Storage type of a per-step column: the regime code and the converged flag are int8, the rest float."""
+    """Storage type of a per-step column: the regime code, the converged flag and the stick-interval count
+    are int8, the step index int64, the rest float."""
+    if name == "step":
+        return np.int64
     return np.int8 if name in ("regime", "converged", "stick_intervals") else float
 
 
@@ -140,7 +142,7 @@ class _Records:
     are kept as arrays. ``column(name)`` joins both in order.
     """
 
-    names = ("t", "P", "Q", "M", "sigma", "contact_left", "contact_right",
+    names = ("t", "step", "P", "Q", "M", "sigma", "contact_left", "contact_right",
              "stick_left", "stick_right", "regime", "rigid_shift", "dissipation", "converged", "residual",
              "stick_intervals")
 
@@ -155,10 +157,11 @@ class _Records:
                 self.chunks[k].append(np.asarray(self.buffer[k], _dtype(k)))
                 self.buffer[k] = []
 
-    def add(self, state: ContactState, regime: Regime, converged: bool = True, residual: float = 0.0,
+    def add(self, step: int, state: ContactState, regime: Regime, converged: bool = True, residual: float = 0.0,
             stick_intervals: int = 1):
         c = self.buffer
         c["t"].append(state.t)
+        c["step"].append(step)
         for k, v in zip(("P", "Q", "M", "sigma"), state.loads):
             c[k].append(v)
         c["contact_left"].append(state.contact_left)
@@ -312,8 +315,7 @@ def _add_permanent_stick(ds: xr.Dataset) -> None:
     except HalfslipInputError:  # no cycles segment, or no full cycle stored
         return
     for side in ("left", "right"):
-        ds[f"permanent_stick_{side}"] = ((), float(zone[side]), {
-            "units": "m", "long_name": f"{side} edge of the permanent stick zone (last full cycle)"})
+        ds[f"permanent_stick_{side}"] = ((), float(zone[side]), variables.attrs(f"permanent_stick_{side}"))
 
 
 def scene_hash(scene) -> str:
@@ -348,19 +350,22 @@ class _Run:
         self.counters = {"steps": 0, "stick_steps": 0, "slip_solves": 0, "normal_solves": 0, "failed_steps": 0}
         self.log = MessageLog()
         self.skipper = CycleSkipper(h, self.solver) if scene.solver.skip_steady_cycles else None
+        self.skip = SkipState()  # what the skipper has seen: replaced, never changed, and checkpointed
         self.elapsed_before = 0.0
         # compiled marching of many steps at once where the solver offers it (extents only)
         self.chunked = not fields and self.solver.can_march
-        self._store(Regime.SEPARATED)
+        self._store(0, self.state, Regime.SEPARATED)
 
     def skipped_steps(self) -> int:
         """Steps of the history skipped so far as repeats of a steady cycle."""
-        return 0 if self.skipper is None else self.skipper.skipped_steps
+        segments = self.scene.history.segments
+        return sum(skip.count * segments[k].steps_per_cycle for k, skip in self.skip.skipped.items())
 
-    def _store(self, regime: Regime, converged: bool = True, residual: float = 0.0) -> None:
-        self.rec.add(self.state, regime, converged, residual, self.solver.stick_intervals(self.state))
+    def _store(self, i: int, state: ContactState, regime: Regime, converged: bool = True,
+               residual: float = 0.0) -> None:
+        self.rec.add(i, state, regime, converged, residual, self.solver.stick_intervals(state))
         if self.save.fields:
-            self.rec.add_fields(_fields(self.solver, self.state, self.save))
+            self.rec.add_fields(_fields(self.solver, state, self.save))
 
     def advance(self) -> None:
         """One step, or with a compiled solver a chunk of steps up to the next cycle end."""
@@ -380,16 +385,14 @@ class _Run:
         c["failed_steps"] += not report.converged
         if report.message:
             self.log.add_text(i, float(h.t[i]), report.message, {"gross_sliding": _shear_ratio(loads1, self.scene.friction)})
-        jumped = False
+        jump = None
         if self.skipper is not None:
-            self.skipper.observe(i, state)
-            jump = self.skipper.check(i, state)
-            if jump is not None:
-                i, state = jump
-                jumped = True
-        self.i, self.state = i, state
-        if self.save.stored(i, n) or jumped or not report.converged:  # a failed step is always stored
-            self._store(report.regime, report.converged, report.residual)
+            self.skip = self.skipper.observe(self.skip, i, state)
+            self.skip, jump = self.skipper.check(self.skip, i, state)
+        # a failed step is always stored, and so is the last marched step before a skip
+        if self.save.stored(i, n) or jump is not None or not report.converged:
+            self._store(i, state, report.regime, report.converged, report.residual)
+        self.i, self.state = (i, state) if jump is None else jump
 
     def _advance_chunk(self) -> None:
         h = self.scene.history
@@ -412,16 +415,15 @@ class _Run:
             ratio = np.abs(h.Q[at]) / (self.scene.friction * h.P[at])
             self.log.add_many("gross_sliding", at, h.t[at], ratio, GROSS_SLIDING_MESSAGE)
         mask = (idx % self.save.every == 0) | (idx == n)
-        jump = self.skipper.check(stop, state) if self.skipper is not None else None
+        jump = None
+        if self.skipper is not None:
+            self.skip, jump = self.skipper.check(self.skip, stop, state)
         if jump is not None:
-            mask[-1] = False  # the jumped state is stored in its place, as in the step path
-        steps.update(t=h.t[idx], P=h.P[idx], Q=h.Q[idx], M=h.M[idx], sigma=h.sigma[idx])
+            mask[-1] = True  # the last marched step before a skip is stored, as in the step path
+        steps.update(t=h.t[idx], step=idx, P=h.P[idx], Q=h.Q[idx], M=h.M[idx], sigma=h.sigma[idx])
         steps["rigid_shift"] = steps.pop("shift")
         self.rec.add_steps(steps, mask)
-        self.i, self.state = stop, state
-        if jump is not None:
-            self.i, self.state = jump
-            self._store(Regime(int(regime[-1])))
+        self.i, self.state = (stop, state) if jump is None else jump
 
     def dataset(self, complete: int, elapsed: float) -> xr.Dataset:
         from ._version import __version__
@@ -429,6 +431,10 @@ class _Run:
         ds = _dataset(self.rec, self.save)
         scene = self.scene
         log = self.log.copy()
+        skip = None if self.skipper is None else self.skip
+        ds = ds.assign(segment_table(scene.history, skip))
+        for name, value in (("final_t", self.state.t), ("final_dissipation", self.state.dissipation)):
+            ds[name] = ((), float(value), variables.attrs(name))
         ds.attrs.update(
             {
                 "title": f"halfslip run of {scene.name}",
@@ -444,8 +450,9 @@ class _Run:
                 "shift_datum": self.solver.datum,
                 "wall_time": self.elapsed_before + elapsed,
                 "messages": "",
-                "skipped_cycles": 0 if self.skipper is None else self.skipper.total,
-                "skipped_cycles_per_segment": "" if self.skipper is None else self.skipper.describe(),
+                "output_every": scene.output.every,
+                "skipped_cycles": self.skip.total,
+                "skipped_cycles_per_segment": describe_skips(skip),
                 **{f"count_{k}": v for k, v in self.counters.items()},
             }
         )
@@ -462,17 +469,13 @@ class _Run:
         return ds.assign(log.variables())
 
     def checkpoint(self, elapsed: float) -> dict:
-        sk = self.skipper
         return {
             "i": self.i,
             "state": self.state,
             "counters": dict(self.counters),
             "messages": self.log.checkpoint(),
             "elapsed": self.elapsed_before + elapsed,
-            "skipper": None if sk is None else {"previous": dict(sk.previous), "skipped": dict(sk.skipped),
-                                                "traces": {k: {"previous": v["previous"],
-                                                               "current": np.asarray(v["current"], float).reshape(-1, 2)}
-                                                           for k, v in sk.traces.items()}},
+            "skipper": None if self.skipper is None else self.skip.to_tree(),
         }
 
     def restore(self, ds: xr.Dataset, checkpoint: dict) -> None:
@@ -497,11 +500,7 @@ class _Run:
         self.log = MessageLog.from_checkpoint(checkpoint["messages"])
         self.elapsed_before = float(checkpoint["elapsed"])
         if self.skipper is not None and checkpoint["skipper"] is not None:
-            self.skipper.previous = dict(checkpoint["skipper"]["previous"])
-            self.skipper.skipped = dict(checkpoint["skipper"]["skipped"])
-            self.skipper.traces = {k: {"previous": v["previous"], "current": [tuple(r) for r in v["current"]]}
-                                   for k, v in checkpoint["skipper"].get("traces", {}).items()}
-
+            self.skip = SkipState.from_tree(checkpoint["skipper"])
 
     def _checkpoint_problem(self, ds: xr.Dataset, checkpoint) -> str | None:
         """What is wrong with a decoded checkpoint for this run (None when it fits).
@@ -531,102 +530,22 @@ class _Run:
             return problem
         if not isinstance(checkpoint["elapsed"], float):
             return "its elapsed time is not a number"
+        if "step" not in ds.variables or "segment_kind" not in ds.variables:
+            return "the file was written by halfslip 0.2 or older (no step index, no segment table); run it again"
+        skipper = checkpoint["skipper"]
+        if skipper is not None:
+            try:
+                skip = SkipState.from_tree(skipper)
+            except (TypeError, ValueError, KeyError, AttributeError):
+                return "its cycle skipper state is malformed"
+            segments = range(len(self.scene.history.segments))
+            if not all(k in segments for k in (*skip.previous, *skip.skipped, *skip.traces)):
+                return "its cycle skipper names segments this history does not have"
+            if not all(isinstance(s, ContactState) and isinstance(s.memory, memory_type) for s in skip.previous.values()):
+                return f"its cycle skipper holds states that are not {memory_type.__name__} states"
         if int(ds.sizes.get("t", 0)) > i + 1:
             return "the file stores more steps than the checkpoint has marched"
         return None
-
-
-class CycleSkipper:
-    """Stops marching a ``cycles`` segment once its cycle repeats.
-
-    After each full cycle the state is compared (``solver.same_state``, to the
-    solver's tolerance) with the state one cycle earlier. When they agree the
-    remaining cycles are skipped: time jumps to the segment's end, the state is
-    the repeated one, and the dissipation grows by the remaining cycles times
-    the dissipation of the last cycle -- exact, since every cycle from then on
-    is the same. Every cycle of a segment is sampled bit-identically, so the
-    state at the segment's end is the state at the end of any steady cycle.
-    """
-
-    def __init__(self, history, solver):
-        self.same = solver.same_state
-        # a solver whose states agree only to a tolerance also asks that the cycle's stick
-        # edges repeat, step by step, to ``cycle_tolerance(state)`` [m]: a difference that
-        # the memory at the cycle's end hides (a slip zone that reached less far at a peak
-        # in a narrow strip) shows there
-        self.tolerance = solver.cycle_tolerance
-        self.ends = {}  # step index of a cycle end -> (segment index, segment)
-        self.segment_of = []  # (start, stop, segment index) of the cycles segments
-        self._sorted_ends = None
-        for k, seg in enumerate(history.segments):
-            if seg.kind == "cycles" and seg.count and seg.count > 2:
-                for j in range(1, seg.count):
-                    self.ends[seg.start + j * seg.steps_per_cycle] = (k, seg)
-                self.segment_of.append((seg.start, seg.stop, k))
-        self.t = history.t
-        self.segments = history.segments
-        self.previous = {}
-        self.skipped = {}
-        self.traces = {}  # segment index -> {"previous": edges of the last cycle, "current": this one's}
-
-    def observe(self, i: int, state: ContactState) -> None:
-        """Record the stick edges of step i (only when the solver states a cycle tolerance)."""
-        if self.tolerance is None:
-            return
-        for start, stop, k in self.segment_of:
-            if start < i <= stop:
-                trace = self.traces.setdefault(k, {"previous": None, "current": []})
-                trace["current"].append((state.stick_left, state.stick_right))
-                return
-
-    def _trajectory_repeats(self, k: int, state: ContactState) -> bool:
-        if self.tolerance is None:
-            return True
-        trace = self.traces.get(k)
-        if trace is None:
-            return False
-        prev, cur = trace["previous"], np.asarray(trace["current"], dtype=float).reshape(-1, 2)
-        trace["previous"], trace["current"] = cur, []
-        if prev is None or prev.shape != cur.shape:
-            return False
-        both_nan = np.isnan(prev) & np.isnan(cur)
-        diff = np.where(both_nan, 0.0, np.abs(prev - cur))
-        return bool(np.all(diff <= self.tolerance(state)))  # NaN against a number fails
-
-    def next_end(self, i: int) -> int:
-        """The first cycle end after step i (a large number when there is none)."""
-        if self._sorted_ends is None:
-            self._sorted_ends = np.array(sorted(self.ends), dtype=np.int64)
-        k = int(np.searchsorted(self._sorted_ends, i, side="right"))
-        return int(self._sorted_ends[k]) if k < len(self._sorted_ends) else 1 << 62
-
-    @property
-    def total(self) -> int:
-        return sum(self.skipped.values())
-
-    @property
-    def skipped_steps(self) -> int:
-        """Steps not marched: skipped cycles times their steps per cycle."""
-        return sum(v * self.segments[k].steps_per_cycle for k, v in self.skipped.items())
-
-    def describe(self) -> str:
-        return ", ".join(f"loads[{k}]: {v}" for k, v in sorted(self.skipped.items()))
-
-    def check(self, i: int, state: ContactState):
-        """Return (new index, new state) when the rest of the segment is skipped."""
-        if i not in self.ends:
-            return None
-        k, seg = self.ends[i]
-        prev = self.previous.get(k)
-        self.previous[k] = state
-        repeats = self._trajectory_repeats(k, state)
-        if prev is None or not repeats or not self.same(prev, state):
-            return None
-        remaining = (seg.stop - i) // seg.steps_per_cycle
-        per_cycle = state.dissipation - prev.dissipation
-        self.skipped[k] = remaining
-        new = dataclasses.replace(state, t=float(self.t[seg.stop]), dissipation=state.dissipation + remaining * per_cycle)
-        return seg.stop, new
 
 
 def _shear_ratio(loads: Loads, friction: float) -> float:
@@ -649,28 +568,6 @@ def _fields(solver, state: ContactState, save: SaveAt) -> dict:
     return out
 
 
-_META = {
-    "t": ("s", "time"),
-    "x": ("m", "surface coordinate"),
-    "P": ("N/m", "normal load"),
-    "Q": ("N/m", "shear force"),
-    "M": ("N", "moment about the pad axis"),
-    "sigma": ("Pa", "differential bulk tension sigma_A - sigma_B"),
-    "contact_left": ("m", "left contact edge"),
-    "contact_right": ("m", "right contact edge"),
-    "stick_left": ("m", "left stick-zone edge"),
-    "stick_right": ("m", "right stick-zone edge"),
-    "regime": ("1", "contact regime"),
-    "rigid_shift": ("m", "rigid tangential displacement of pad relative to substrate"),
-    "dissipation": ("J/m", "frictional energy dissipated since the start"),
-    "p": ("Pa", "contact pressure"),
-    "q": ("Pa", "shear traction exerted by the pad on the substrate"),
-    "slip": ("m", "accumulated slip since the point entered contact"),
-    "converged": ("1", "whether the step met the method's own tolerance (1) or not (0)"),
-    "residual": ("1", "violation of the step's checks relative to their tolerance (<= 1 when converged)"),
-    "stick_intervals": ("1", "number of stick intervals (0 when nothing sticks)"),
-    "state": ("1", "what the surface point did in the step"),
-}
 
 
 def _dataset(rec: _Records, save: SaveAt) -> xr.Dataset:
@@ -685,15 +582,12 @@ def _dataset(rec: _Records, save: SaveAt) -> xr.Dataset:
             data[k] = (("t", "x"), np.asarray(rows, np.int8 if k == "state" else float))
     ds = xr.Dataset(data, coords=coords)
     for k in ds.variables:
-        units, long_name = _META[k]
-        ds[k].attrs.update(units=units, long_name=long_name)
+        ds[k].attrs.update(variables.attrs(k))
     ds["t"].attrs["axis"] = "T"
     if "x" in ds.coords:
         ds["x"].attrs["axis"] = "X"
     ds.attrs["Conventions"] = "CF-1.10"
-    ds["regime"].attrs.update(
-        flag_values=np.arange(4, dtype=np.int8), flag_meanings=Regime.flag_meanings()
-    )
+    ds["regime"].attrs.update(flag_values=Regime.flag_values(), flag_meanings=Regime.flag_meanings())
     if "state" in ds:
         ds["state"].attrs.update(flag_values=np.arange(4, dtype=np.int8), flag_meanings=STATION_STATES)
     return ds

@@ -37,7 +37,23 @@ class Regime(enum.IntEnum):
 
     @classmethod
     def flag_meanings(cls) -> str:
+        """The CF ``flag_meanings`` of a stored regime: ``separated stick partial_slip gross_sliding``."""
         return " ".join(m.name.lower() for m in cls)
+
+    @classmethod
+    def flag_values(cls) -> np.ndarray:
+        """The CF ``flag_values`` of a stored regime (int8, in the order of :meth:`flag_meanings`)."""
+        return np.array([int(m) for m in cls], dtype=np.int8)
+
+
+def frozen(a) -> np.ndarray:
+    """``a`` as an array, made read-only in place (the one helper for immutable arrays of a state).
+
+    Copy first (``frozen(np.array(a, float))``) when the caller's array must stay writable.
+    """
+    a = np.asarray(a)
+    a.flags.writeable = False
+    return a
 
 
 @dataclass(frozen=True)

@@ -29,6 +29,8 @@ from scipy.optimize import brentq
 from .errors import HalfslipInputError
 from .geometry import Hertz, NormalProblem
 from .state import Regime
+from . import variables
+from .variables import SUMMARY
 
 LOADS = ("P", "Q", "M", "sigma")
 
@@ -189,11 +191,10 @@ def steady_state(scene, segment: int | None = None, *, per_cycle: bool = True) -
         attrs = {**attrs, "warning": warning}
     ds = xr.Dataset(
         {
-            "permanent_stick_left": ((), left, {"units": "m", "long_name": "left edge of the permanent stick zone"}),
-            "permanent_stick_right": ((), right, {"units": "m", "long_name": "right edge of the permanent stick zone"}),
-            "regime": ((), np.int8(regime), {"units": "1", "long_name": "steady-cycle regime",
-                                             "flag_values": np.arange(4, dtype=np.int8),
-                                             "flag_meanings": Regime.flag_meanings()}),
+            "permanent_stick_left": ((), left, variables.attrs("permanent_stick_left", SUMMARY)),
+            "permanent_stick_right": ((), right, variables.attrs("permanent_stick_right", SUMMARY)),
+            "regime": ((), np.int8(regime), variables.attrs("regime", SUMMARY, flag_values=Regime.flag_values(),
+                                                  flag_meanings=Regime.flag_meanings())),
         },
         attrs={"halfslip_version": _version(), "method": method, "note": note, "scene_name": scene.name,
                "max_shear_ratio": shear_ratio, **attrs},
@@ -242,34 +243,37 @@ def _in_phase(problem, A, f, one, two):
 
 
 def _per_cycle_quantities(scene, index, seg) -> xr.Dataset:
-    """March the history up to two cycles of the segment; measure the second cycle."""
+    """March the history up to two cycles of the segment; measure the second cycle.
+
+    The short history keeps the segments before ``index`` and the first two
+    cycles of the segment itself, so the run's segment table lists its cycles
+    and :mod:`halfslip.post` measures the last one, as for any run.
+    """
+    from . import post
     from .histories import LoadHistory
     from .simulator import simulate
 
-    spc = seg.steps_per_cycle
-    stop = seg.start + 2 * spc
+    count = min(2, int(seg.count))
+    stop = seg.start + count * seg.steps_per_cycle
     h = scene.history
-    sl = slice(0, min(stop, seg.stop) + 1)
-    history = LoadHistory.from_arrays(h.t[sl], h.P[sl], h.Q[sl], h.M[sl], h.sigma[sl])
+    sl = slice(0, stop + 1)
+    cycles = dataclasses.replace(seg, stop=stop, t_stop=float(h.t[stop]), count=count)
+    history = LoadHistory(h.t[sl], {name: values[sl] for name, values in h.loads().items()},
+                          (*h.segments[:index], cycles))
     short = dataclasses.replace(
         scene, history=history, output=dataclasses.replace(scene.output, fields=("slip",), every=1),
         solver=dataclasses.replace(scene.solver, skip_steady_cycles=False),
     )
-    try:
-        ds = simulate(short)
-    except ImportError:  # the general solver is not available
-        return xr.Dataset()
-    last = ds.isel(t=slice(-spc - 1, None))
-    slip = last["slip"]
-    amplitude = 0.5 * (slip.max("t") - slip.min("t"))
-    dissipated = float(last["dissipation"][-1] - last["dissipation"][0])
+    ds = simulate(short)
+    amplitude = post.slip_amplitude(ds)
+    dissipated = float(post.dissipation_per_cycle(ds)["dissipation"][-1])
     return xr.Dataset(
         {
-            "dissipation_per_cycle": ((), dissipated, {"units": "J/m", "long_name": "energy dissipated per steady cycle"}),
-            "peak_slip_amplitude": ((), float(amplitude.max()), {"units": "m", "long_name": "peak slip amplitude in the steady cycle"}),
-            "slip_amplitude": (("x",), amplitude.values, {"units": "m", "long_name": "slip amplitude in the steady cycle"}),
+            "dissipation_per_cycle": ((), dissipated, variables.attrs("dissipation_per_cycle", SUMMARY)),
+            "peak_slip_amplitude": ((), float(amplitude.max()), variables.attrs("peak_slip_amplitude", SUMMARY)),
+            "slip_amplitude": (("x",), amplitude.values, variables.attrs("slip_amplitude", SUMMARY)),
         },
-        coords={"x": ("x", ds.x.values, {"units": "m", "long_name": "surface coordinate"})},
+        coords={"x": ("x", ds.x.values, variables.attrs("x"))},
     )
 
 

@@ -43,6 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..geometry import NormalSolution
+from ..state import frozen as _frozen
 from . import _general_sie as sie
 
 #: Newton iterations for the stick edges.
@@ -588,10 +589,6 @@ class StepProblem:
             hil = hil + shear.fixup * 2.0 / (math.pi * shear.radius) * sie.rho(t)
         return out + self.A * hil + 0.25 * self.A * self.sigma
 
-
-def _frozen(a: np.ndarray) -> np.ndarray:
-    a.flags.writeable = False
-    return a
 
 
 def _ramp_rule(L: float, b1: float, breaks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

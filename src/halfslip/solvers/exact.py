@@ -42,6 +42,7 @@ import numpy as np
 
 from ..geometry import NormalProblem
 from ..state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime, StepReport
+from ..state import frozen as _frozen
 from .base import TangentialSolver
 from .levels import HertzLevels, LevelIntegrals, level_integrals
 
@@ -490,8 +491,4 @@ class ExactMemory(TangentialSolver):
             raise ValueError("slip is tracked only when the method is built with stations")
         return self.phi(mem, self.stations) - mem.phi_ref
 
-
-def _frozen(a: np.ndarray) -> np.ndarray:
-    a.flags.writeable = False
-    return a
 

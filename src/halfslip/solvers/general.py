@@ -47,6 +47,7 @@ import numpy as np
 
 from ..geometry import NormalProblem, NormalSolution, RoundedPunch, TabulatedProfile
 from ..state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime, StepReport
+from ..state import frozen as _frozen
 from .base import TangentialSolver
 from . import _general_points as pts
 from . import _general_sie as sie
@@ -906,8 +907,3 @@ def _apart(u: float, v: float) -> float:
         return 0.0 if math.isnan(u) and math.isnan(v) else math.inf
     return abs(u - v)
 
-
-def _frozen(a: np.ndarray) -> np.ndarray:
-    a = np.asarray(a)
-    a.flags.writeable = False
-    return a

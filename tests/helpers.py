@@ -1,0 +1,87 @@
+"""Helpers shared by the test files: bodies, solvers, marching, scene texts.
+
+Imported as ``from helpers import ...`` (pytest puts this folder on the path,
+as it does for conftest.py). Steel on steel, per unit depth:
+A = 4 (1 - nu^2) / E with E = 200 GPa, nu = 0.3; f = 0.6; P0 = 1e5 N/m.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Callable, Iterable
+
+from halfslip.geometry import Hertz, NormalProblem, RoundedPunch
+from halfslip.state import Loads
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+A = 4 * (1 - 0.3**2) / 200e9
+"""Compliance 4(1 - nu^2)/E of steel on steel [1/Pa]."""
+F = 0.6
+P0 = 1.0e5
+R_HERTZ = 50e-3
+W_FLAT = 0.2e-3
+R_CORNER = 10e-3
+
+PROFILES = {
+    "hertz": Hertz(radius=R_HERTZ),
+    "punch": RoundedPunch(flat_half_width=W_FLAT, radius=R_CORNER),
+}
+
+
+def make(kind: str, method: str = "general", *, nodes: int = 256, P_max: float = P0, stations=None, **kw):
+    """``(problem, solver)`` for profile `kind` ('hertz' or 'punch') and `method` ('exact' or 'general')."""
+    problem = NormalProblem(PROFILES[kind], A)
+    if method == "exact":
+        from halfslip.solvers.exact import ExactMemory
+
+        return problem, ExactMemory(problem, F, P_max, stations=stations, **kw)
+    from halfslip.solvers.general import GeneralSolver
+
+    return problem, GeneralSolver(problem, F, nodes, **kw)
+
+
+def march(solver, path: Iterable, state=None, t0: float = 0.0, check: Callable | None = None) -> list:
+    """Step `solver` through `path` (tuples of up to four loads P, Q, M, sigma) at t0 + 1, t0 + 2, ...
+
+    Returns the list of ``(state, report)``; ``check(previous, state, report)``
+    is called after every step when given.
+    """
+    state = solver.initial_state() if state is None else state
+    out = []
+    for i, loads in enumerate(path):
+        loads = tuple(loads) + (0.0,) * (4 - len(loads))
+        previous = state
+        state, report = solver.step(state, t0 + i + 1.0, Loads(*loads))
+        if check is not None:
+            check(previous, state, report)
+        out.append((state, report))
+    return out
+
+
+def states(solver, path: Iterable, state=None, t0: float = 0.0) -> list:
+    """The states of :func:`march`."""
+    return [s for s, _ in march(solver, path, state, t0)]
+
+
+def example_text(name: str, **replace: str) -> str:
+    """The text of ``examples/<name>.yaml`` with each ``old=new`` of `replace` applied (keys: old text)."""
+    text = (EXAMPLES / f"{name}.yaml").read_text()
+    for old, new in replace.items():
+        assert old in text, old
+        text = text.replace(old, new)
+    return text
+
+
+def hertz_pad_text(count: int = 20, steps: int = 100, extra: str = "") -> str:
+    """hertz_pad.yaml with another cycle count / resolution and extra top-level YAML."""
+    text = (EXAMPLES / "hertz_pad.yaml").read_text()
+    text = text.replace("count: 20", f"count: {count}").replace("steps_per_cycle: 100", f"steps_per_cycle: {steps}")
+    return text + extra
+
+
+def hertz_pad_segments(count: int = 20, steps: int = 100) -> list:
+    """The ``loads`` of :func:`hertz_pad_text` as Python data (for ``LoadHistory.from_segments``)."""
+    return [
+        {"ramp": {"to": {"P": 1.0e5}, "duration": 1.0, "steps": 20}},
+        {"cycles": {"count": count, "period": 1.0, "steps_per_cycle": steps, "Q": {"amplitude": 1.8e4}}},
+    ]
