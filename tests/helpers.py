@@ -85,3 +85,34 @@ def hertz_pad_segments(count: int = 20, steps: int = 100) -> list:
         {"ramp": {"to": {"P": 1.0e5}, "duration": 1.0, "steps": 20}},
         {"cycles": {"count": count, "period": 1.0, "steps_per_cycle": steps, "Q": {"amplitude": 1.8e4}}},
     ]
+
+
+#: A long Hertz motor-support history (16,010 steps, no skipping): a run of it is still going when
+#: a test interrupts it or starts a second writer.
+LONG_MOTOR_SCENE = """
+name: long-motor
+material: {E: 200.0e9, nu: 0.3}
+friction: 0.6
+geometry: {kind: hertz, radius: 50.0e-3}
+loads:
+  - ramp: {to: {P: 1.0e5, Q: 3.0e4}, duration: 1.0, steps: 10}
+  - cycles:
+      count: 40
+      period: 1.0
+      steps_per_cycle: 400
+      P: {amplitude: 3.0e4}
+      Q: {mean: 0.0, amplitude: 3.0e4, phase: 90.0}
+solver: {skip_steady_cycles: false}
+output: {fields: [p, q, slip], points: 81}
+"""
+
+
+def as_from_a_terminal() -> None:
+    """In a child process (``preexec_fn``): Ctrl-C delivered as at a terminal.
+
+    A background job of a non-interactive shell starts with SIGINT ignored, and
+    its children inherit that; a test that interrupts a child must undo it.
+    """
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_DFL)

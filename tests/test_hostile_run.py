@@ -27,28 +27,16 @@ import pytest
 import xarray as xr
 
 import halfslip as hs
+from helpers import LONG_MOTOR_SCENE, as_from_a_terminal
 from halfslip import io
 from halfslip.simulator import simulate
 
 MEMORY_LIMIT = 2 * 2**30
 TIME_LIMIT = 120  # s; every refusal here takes under 5 s on the CI machine, a run under 20 s
 
-SCENE = textwrap.dedent("""
-    name: hostile-target
-    material: {E: 200.0e9, nu: 0.3}
-    friction: 0.6
-    geometry: {kind: hertz, radius: 50.0e-3}
-    loads:
-      - ramp: {to: {P: 1.0e5, Q: 3.0e4}, duration: 1.0, steps: 10}
-      - cycles:
-          count: 40
-          period: 1.0
-          steps_per_cycle: 400
-          P: {amplitude: 3.0e4}
-          Q: {mean: 0.0, amplitude: 3.0e4, phase: 90.0}
-    solver: {method: general, nodes: 64, skip_steady_cycles: false}
-    output: {fields: [p, q], points: 41}
-""")
+SCENE = (LONG_MOTOR_SCENE.replace("long-motor", "hostile-target")
+         .replace("solver: {skip_steady_cycles: false}", "solver: {method: general, nodes: 64, skip_steady_cycles: false}")
+         .replace("output: {fields: [p, q, slip], points: 81}", "output: {fields: [p, q], points: 41}"))
 #: The general solver on a long history: minutes of marching, so that a run is still going when
 #: it is interrupted or a second run starts; its checkpoint holds arrays (the locked-in strains).
 SHORT_SCENE = SCENE.replace("count: 40", "count: 2").replace("steps_per_cycle: 400", "steps_per_cycle: 40")
@@ -57,11 +45,6 @@ SHORT_SCENE = SCENE.replace("count: 40", "count: 2").replace("steps_per_cycle: 4
 def _limits():
     resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT, MEMORY_LIMIT))
     as_from_a_terminal()
-
-
-def as_from_a_terminal():
-    """In the child: Ctrl-C delivered as at a terminal (a background job inherits SIGINT ignored)."""
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
 def start(*args):

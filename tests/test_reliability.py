@@ -6,7 +6,6 @@ import random
 import signal
 import subprocess
 import sys
-import textwrap
 import time
 from pathlib import Path
 
@@ -14,32 +13,13 @@ import h5py
 import numpy as np
 import pytest
 import xarray as xr
+from helpers import LONG_MOTOR_SCENE, as_from_a_terminal
 
-LONG_SCENE = textwrap.dedent("""
-    name: long-motor
-    material: {E: 200.0e9, nu: 0.3}
-    friction: 0.6
-    geometry: {kind: hertz, radius: 50.0e-3}
-    loads:
-      - ramp: {to: {P: 1.0e5, Q: 3.0e4}, duration: 1.0, steps: 10}
-      - cycles:
-          count: 40
-          period: 1.0
-          steps_per_cycle: 400
-          P: {amplitude: 3.0e4}
-          Q: {mean: 0.0, amplitude: 3.0e4, phase: 90.0}
-    solver: {skip_steady_cycles: false}
-    output: {fields: [p, q, slip], points: 81}
-""")
+LONG_SCENE = LONG_MOTOR_SCENE
 
 
 def run_cli(*args, **kwargs):
     return subprocess.run([sys.executable, "-m", "halfslip.cli", *args], capture_output=True, text=True, **kwargs)
-
-
-def as_from_a_terminal():
-    """In the child: Ctrl-C delivered as at a terminal (a background job inherits SIGINT ignored)."""
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
 def start_cli(*args):

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
+from helpers import as_from_a_terminal
 
 import halfslip as hs
 from halfslip.errors import HalfslipInputError
@@ -341,7 +342,7 @@ def test_the_command_line_stops_on_sigint_and_the_same_command_finishes(tmp_path
     command = [sys.executable, "-c", "from halfslip.cli import main; main()", "sweep", str(path), "-o", str(out), "--workers", "2",
                "--cases-dir", str(cases), "--quiet"]
     process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))  # as at a terminal
+                               preexec_fn=as_from_a_terminal)
     deadline = time.monotonic() + 120
     while len(list(cases.glob("case_*.h5"))) < 2 and time.monotonic() < deadline and process.poll() is None:
         time.sleep(0.01)
