@@ -325,7 +325,7 @@ FIGURE_FORMATS = ("png", "pdf", "svg", "eps", "ps", "jpg", "jpeg", "tif", "tiff"
 
 def check_figure_output(target, source) -> None:
     """Refuse, before drawing, a figure path that is not a figure format or is the result itself."""
-    from .io import _same_file
+    from .io import same_file
 
     if target.is_dir() or not target.suffix or str(target).endswith(("/", "\\")):
         return  # a folder, made by write_figures (plot.py: a path without an ending is a folder)
@@ -333,7 +333,7 @@ def check_figure_output(target, source) -> None:
     if suffix not in FIGURE_FORMATS:
         raise HalfslipInputError(f"a figure is written as {', '.join(FIGURE_FORMATS)} (by its ending); "
                                  f"got {excerpt(target.name)}", file=str(target), field="-o")
-    if _same_file(target, source):
+    if same_file(target, source):
         raise HalfslipInputError("is the result file itself; name a figure file", file=str(target), field="-o")
 
 
@@ -351,14 +351,14 @@ def read_unfinished_run(out, scene: Scene):
     must belong to ``scene`` (its scene hash) before its checkpoint is
     decoded; the checkpoint is pure data (``io.read_checkpoint``).
     """
-    from .io import CheckpointError, read_checkpoint, read_result
+    from .io import CheckpointError, UnsafeFileError, read_checkpoint, read_result
     from .simulator import scene_hash
 
     if not out.exists():
         raise HalfslipInputError("does not exist: nothing to resume", file=str(out), field="--resume")
     try:
         ds = read_result(out)
-    except CheckpointError as error:
+    except UnsafeFileError as error:
         raise HalfslipInputError(f"not a halfslip run file: {error}", file=str(out), field="--resume") from None
     except (OSError, ValueError, KeyError, TypeError) as error:
         raise HalfslipInputError(f"not a halfslip run file (cannot read it: {type(error).__name__})",
@@ -528,7 +528,7 @@ def plot(result_file: str, output: str | None, kinds: tuple, at: tuple, quiet: b
     from pathlib import Path
 
     from . import plot as plots
-    from .io import CheckpointError, read_result
+    from .io import UnsafeFileError, read_result
     from .post import check_result, result_kind
 
     source = Path(result_file)
@@ -538,7 +538,7 @@ def plot(result_file: str, output: str | None, kinds: tuple, at: tuple, quiet: b
         check_figure_output(Path(output), source)
     try:
         ds = read_result(source)
-    except CheckpointError as error:  # a file that is not plain bounded data (io.check_result_file)
+    except UnsafeFileError as error:  # a file that is not plain bounded data (io.check_result_file)
         raise HalfslipInputError(f"not a halfslip result: {error}", file=result_file) from None
     except Exception as error:  # h5py / h5netcdf raise OSError, ValueError, KeyError ...
         raise HalfslipInputError(f"not a halfslip result (cannot read it: {type(error).__name__})",

@@ -164,7 +164,7 @@ def check_result_file(path: str | os.PathLike) -> None:
 
     Raises
     ------
-    CheckpointError
+    UnsafeFileError
         With what is wrong (the caller names the file).
     """
     import h5py
@@ -178,28 +178,28 @@ def check_result_file(path: str | os.PathLike) -> None:
             for name in group:
                 seen["objects"] += 1
                 if seen["objects"] > RESULT_LIMITS["objects"]:
-                    raise CheckpointError(f"it holds more than {RESULT_LIMITS['objects']} objects")
+                    raise UnsafeFileError(f"it holds more than {RESULT_LIMITS['objects']} objects")
                 if not isinstance(group.get(name, getlink=True), h5py.HardLink):
-                    raise CheckpointError(f"{excerpt(name)} is a link to elsewhere")
+                    raise UnsafeFileError(f"{excerpt(name)} is a link to elsewhere")
                 obj = group[name]
                 if isinstance(obj, h5py.Group):
                     stack.append(obj)
                     continue
                 if not isinstance(obj, h5py.Dataset) or obj.is_virtual or obj.external:
-                    raise CheckpointError(f"{excerpt(name)} is not a plain dataset of this file")
+                    raise UnsafeFileError(f"{excerpt(name)} is not a plain dataset of this file")
                 kind = obj.dtype.kind
                 if not (kind in _ARRAY_KINDS or h5py.check_string_dtype(obj.dtype) is not None):
-                    raise CheckpointError(f"{excerpt(name)} holds {obj.dtype}, neither numbers nor text")
+                    raise UnsafeFileError(f"{excerpt(name)} holds {obj.dtype}, neither numbers nor text")
                 seen["elements"] += int(obj.size)
                 if seen["elements"] > RESULT_LIMITS["elements"]:
-                    raise CheckpointError(f"its datasets hold more than {RESULT_LIMITS['elements']} numbers")
+                    raise UnsafeFileError(f"its datasets hold more than {RESULT_LIMITS['elements']} numbers")
                 _check_attributes(obj)
 
 
 def _check_attributes(obj) -> None:
     for name in obj.attrs:
         if obj.attrs.get_id(name).get_storage_size() > RESULT_LIMITS["attribute_bytes"]:
-            raise CheckpointError(f"its attribute {excerpt(name)} is larger than {RESULT_LIMITS['attribute_bytes']} bytes")
+            raise UnsafeFileError(f"its attribute {excerpt(name)} is larger than {RESULT_LIMITS['attribute_bytes']} bytes")
 
 
 # -- checkpoints: the solver state of an unfinished run ----------------------
@@ -220,7 +220,11 @@ CHECKPOINT_GROUP = "checkpoint"
 CHECKPOINT_FORMAT = "halfslip-checkpoint-2"
 
 
-class CheckpointError(ValueError):
+class UnsafeFileError(ValueError):
+    """A file handed to halfslip that is not plain, bounded data of the form halfslip writes."""
+
+
+class CheckpointError(UnsafeFileError):
     """A checkpoint that is not one this version of halfslip writes."""
 
 
@@ -599,7 +603,7 @@ def check_output(path: str | os.PathLike, *, inputs=(), overwrite: bool = False,
     if not folder.is_dir():
         raise HalfslipInputError(f"the folder {excerpt(folder, PATH_CHARS)} does not exist", file=where, field=option)
     for source in inputs:
-        if source is not None and _same_file(path, Path(source)):
+        if source is not None and same_file(path, Path(source)):
             raise HalfslipInputError(f"is an input of this run ({excerpt(source, PATH_CHARS)}); name another file",
                                      file=where, field=option)
     if path.exists() or path.is_symlink():
@@ -618,7 +622,8 @@ def check_output(path: str | os.PathLike, *, inputs=(), overwrite: bool = False,
     return path
 
 
-def _same_file(a: Path, b: Path) -> bool:
+def same_file(a: Path, b: Path) -> bool:
+    """Whether two paths name the same file (or would, once created)."""
     try:
         if a.exists() and b.exists():
             return os.path.samefile(a, b)
