@@ -249,9 +249,11 @@ def _record_kinds() -> dict:
     from .solvers._general_zones import Config, Shear
     from .solvers.exact import LevelMemory
     from .solvers.general import GeneralMemory
+    from .solvers.lattice import LatticeMemory
     from .state import ContactState, Loads
 
-    classes = (ContactState, Loads, NormalSolution, _ContactPressure, LevelMemory, GeneralMemory, Config, Shear)
+    classes = (ContactState, Loads, NormalSolution, _ContactPressure, LevelMemory, GeneralMemory, Config, Shear,
+               LatticeMemory)
     return {cls.__name__.lstrip("_"): cls for cls in classes}
 
 

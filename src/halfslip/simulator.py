@@ -103,10 +103,33 @@ def build_method(scene, name: str, problem: NormalProblem, stations: np.ndarray 
         from .solvers.exact import ExactMemory
 
         return ExactMemory(problem, scene.friction, P_max, stations=stations)
-    from .solvers.general import GeneralSolver
+    from .solvers.lattice import LatticeSolver
 
-    return GeneralSolver(problem, scene.friction, scene.solver.nodes, stations=stations,
-                         edge_travel=scene.solver.edge_travel)
+    return LatticeSolver(problem, scene.friction, scene.solver.nodes, stations=stations,
+                         width=reference_width(scene, problem))
+
+
+#: Load samples of the history at which the reference contact width is taken (with the largest P).
+WIDTH_SAMPLES = 64
+
+
+def reference_width(scene, problem: NormalProblem) -> float | None:
+    """The widest contact among the history's largest P and WIDTH_SAMPLES evenly spread samples [m].
+
+    The general solver's lattice spacing is this width / solver.nodes for the
+    whole run (None when the history never presses the bodies together).
+    """
+    h = scene.history
+    P, M = np.asarray(h.P, float), np.asarray(h.M, float)
+    if not np.any(P > 0.0):
+        return None
+    idx = np.unique(np.concatenate(([int(np.argmax(P))], np.linspace(0, P.size - 1, WIDTH_SAMPLES).astype(int))))
+    idx = idx[P[idx] > 0.0]
+    widths = []
+    for i in idx:
+        sol = problem.solve(float(P[i]), float(M[i]))
+        widths.append(sol.right - sol.left)
+    return float(max(widths))
 
 
 #: A slip zone narrower than this many lattice spacings (contact width / nodes) leaves slip and

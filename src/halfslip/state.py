@@ -8,6 +8,7 @@ w(P') of the exact method, the locked-in strains of the general solver) lives in
 from __future__ import annotations
 
 import enum
+import math
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
@@ -80,6 +81,11 @@ class StepReport:
         The method's measure of how far the step's answer is from meeting its
         checks, relative to their tolerance (<= 1 when converged; 0 for an exact
         method).
+    iterations : int
+        Iterations of the method's solve (0 when it needs none).
+    error_estimate : float
+        The method's estimate of its discretisation error in the stick edges,
+        relative to the contact width (NaN when it makes none; 0 for an exact method).
     """
 
     regime: Regime
@@ -88,6 +94,8 @@ class StepReport:
     message: str = ""
     converged: bool = True
     residual: float = 0.0
+    iterations: int = 0
+    error_estimate: float = math.nan
 
 
 @dataclass(frozen=True)

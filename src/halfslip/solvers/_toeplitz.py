@@ -1,0 +1,214 @@
+"""Linear algebra of the lattice solver: the log kernel on a uniform lattice is Toeplitz.
+
+Cells of width h, piecewise-constant shear q_j, the relative displacement
+collocated at the cell centres (physics.md, T1 integrated):
+
+    g_i = delta - sum_j t_(i-j) q_j + A sigma x_i / 4,
+    t_k = -(A/pi) [G((k + 1/2) h) - G((k - 1/2) h) - h ln l],   G(v) = v ln|v| - v,
+
+(the integral of -(A/pi) ln(|x_i - xi| / l) over cell j). T = (t_|i-j|) is
+symmetric Toeplitz and positive definite when the datum l exceeds a quarter of
+the lattice span (the logarithmic capacity of an interval is a quarter of its
+length); the solver takes l = 2 N_max h.
+
+The matrix of any contiguous run of n cells is the leading block T_n, whatever
+the run's position. Levinson's recursion gives, in O(N^2) once per lattice,
+the backward predictors b^(k) (T_(k+1) b^(k) = eps_k e_k, last entry 1) of
+every leading block; the first column of T_n^-1 is x = J b^(n-1) / eps_(n-1),
+and the Gohberg-Semencul formula
+
+    T_n^-1 = (L(x) L(x)^T - L(u) L(u)^T) / x_0,   u = Z J x,
+
+(L(v): lower-triangular Toeplitz with first column v, Z the down shift, J the
+reversal) applies T_n^-1 with four FFT convolutions, O(n log n). Products with
+T over the contact use the circulant embedding, also by FFT.
+"""
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+from scipy import fft as sfft
+
+
+def kernel(u: np.ndarray, h: float, datum: float, compliance: float) -> np.ndarray:
+    """t(u): minus the displacement at offset ``u`` from the centre of a unit-shear cell of width ``h``.
+
+    Parameters
+    ----------
+    u : ndarray
+        Offsets x_i - x_j [m] (any shape).
+    h, datum, compliance : float
+        Cell width, log datum l, composite compliance A.
+    """
+    u = np.asarray(u, dtype=float)
+    return -(compliance / math.pi) * (_G(u + 0.5 * h) - _G(u - 0.5 * h) - h * math.log(datum))
+
+
+def _G(v: np.ndarray) -> np.ndarray:
+    a = np.abs(v)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(a > 0.0, v * np.log(np.where(a > 0.0, a, 1.0)) - v, 0.0)
+
+
+@numba.njit(cache=True)
+def _levinson(t: np.ndarray, n: int):  # pragma: no cover - compiled
+    """Backward predictors of every leading block, packed by rows, and the prediction errors."""
+    B = np.zeros(n * (n + 1) // 2)
+    eps = np.empty(n)
+    b = np.zeros(n)
+    new = np.zeros(n)
+    b[0] = 1.0
+    eps[0] = t[0]
+    B[0] = 1.0
+    for k in range(n - 1):
+        g = 0.0
+        for i in range(k + 1):
+            g += t[i + 1] * b[i]
+        r = g / eps[k]
+        new[0] = -r * b[k]
+        for i in range(1, k + 1):
+            new[i] = b[i - 1] - r * b[k - i]
+        new[k + 1] = b[k]
+        for i in range(k + 2):
+            b[i] = new[i]
+        eps[k + 1] = eps[k] - g * r
+        if not eps[k + 1] > 0.0:
+            eps[k + 1] = -1.0
+            return B, eps
+        off = (k + 1) * (k + 2) // 2
+        for i in range(k + 2):
+            B[off + i] = b[i]
+    return B, eps
+
+
+class ToeplitzLattice:
+    """T of a uniform lattice of ``size`` cells: products, and solves on contiguous runs.
+
+    Parameters
+    ----------
+    h : float
+        Cell width [m].
+    size : int
+        Largest number of cells a run (or the contact) may have.
+    compliance : float
+        A.
+    """
+
+    def __init__(self, h: float, size: int, compliance: float):
+        self.h = float(h)
+        self.size = int(size)
+        self.datum = 2.0 * self.size * self.h
+        self.compliance = float(compliance)
+        self.t = kernel(self.h * np.arange(self.size), self.h, self.datum, self.compliance)
+        B, eps = _levinson(self.t, self.size)
+        if not eps[-1] > 0.0:
+            raise ArithmeticError("the lattice kernel is not positive definite (datum too short)")
+        self._B, self._eps = B, eps
+        self._gs: dict[int, tuple] = {}
+        self._circ: dict[int, tuple] = {}
+
+    # -- products ---------------------------------------------------------
+    def matvec(self, v: np.ndarray) -> np.ndarray:
+        """T_n v for v of shape (n,) or (n, k), n <= size (cells of one contiguous range)."""
+        n = v.shape[0]
+        m, spec = self._circulant(n)
+        V = sfft.rfft(v, m, axis=0)
+        if v.ndim == 2:
+            return sfft.irfft(V * spec[:, None], m, axis=0)[:n]
+        return sfft.irfft(V * spec, m)[:n]
+
+    def _circulant(self, n: int):
+        got = self._circ.get(n)
+        if got is None:
+            m = sfft.next_fast_len(2 * n, real=True)
+            c = np.zeros(m)
+            c[:n] = self.t[:n]
+            c[m - n + 1:] = self.t[1:n][::-1]
+            got = (m, sfft.rfft(c))
+            if len(self._circ) > 64:
+                self._circ.clear()
+            self._circ[n] = got
+        return got
+
+    # -- solves -------------------------------------------------------------
+    def solve(self, n: int, w: np.ndarray) -> np.ndarray:
+        """T_n^-1 w for w of shape (n,) or (n, k) (Gohberg-Semencul, by FFT)."""
+        if n == 1:
+            return w / self.t[0]
+        m, X, U, x0 = self._generator(n)
+        twod = w.ndim == 2
+        W = w if twod else w[:, None]
+        R = W[::-1]
+        # L(v)^T w = J L(v) J w
+        FR = sfft.rfft(R, m, axis=0)
+        a = sfft.irfft(FR * X[:, None], m, axis=0)[:n][::-1]
+        b = sfft.irfft(FR * U[:, None], m, axis=0)[:n][::-1]
+        out = (sfft.irfft(sfft.rfft(a, m, axis=0) * X[:, None], m, axis=0)[:n]
+               - sfft.irfft(sfft.rfft(b, m, axis=0) * U[:, None], m, axis=0)[:n]) / x0
+        return out if twod else out[:, 0]
+
+    def _generator(self, n: int):
+        got = self._gs.get(n)
+        if got is None:
+            off = (n - 1) * n // 2
+            b = self._B[off:off + n]
+            e = self._eps[n - 1]
+            x = b[::-1] / e
+            u = np.zeros(n)
+            u[1:] = b[:-1] / e
+            m = sfft.next_fast_len(2 * n, real=True)
+            got = (m, sfft.rfft(x, m), sfft.rfft(u, m), x[0])
+            if len(self._gs) > 256:
+                self._gs.clear()
+            self._gs[n] = got
+        return got
+
+    def solve_runs(self, runs: list[tuple[int, int]], n: int, rhs: np.ndarray, tol: float = 1e-13,
+                   max_iter: int = 200) -> tuple[np.ndarray, int]:
+        """T_SS^-1 rhs on the stick set S = union of ``runs`` (half-open (start, stop) in 0..n).
+
+        One run: a direct Gohberg-Semencul solve. Several: conjugate gradients
+        preconditioned with the exact solve of every run (block Jacobi), the
+        products with T over the n cells by FFT. ``rhs`` has shape (|S|, k).
+
+        Returns
+        -------
+        y : ndarray, shape (|S|, k)
+        iterations : int
+            CG iterations (0 for one run).
+        """
+        if len(runs) == 1:
+            return self.solve(runs[0][1] - runs[0][0], rhs), 0
+        idx = np.concatenate([np.arange(a, b) for a, b in runs])
+        cuts = np.cumsum([0] + [b - a for a, b in runs])
+
+        def prec(r):
+            return np.concatenate([self.solve(cuts[i + 1] - cuts[i], r[cuts[i]:cuts[i + 1]])
+                                   for i in range(len(runs))])
+
+        def op(v):
+            full = np.zeros((n, v.shape[1]))
+            full[idx] = v
+            return self.matvec(full)[idx]
+
+        y = prec(rhs)
+        r = rhs - op(y)
+        z = prec(r)
+        p = z.copy()
+        rz = np.sum(r * z, axis=0)
+        norm = np.sqrt(np.sum(rhs * rhs, axis=0))
+        norm[norm == 0.0] = 1.0
+        it = 0
+        while it < max_iter and np.max(np.sqrt(np.sum(r * r, axis=0)) / norm) > tol:
+            Ap = op(p)
+            alpha = rz / np.sum(p * Ap, axis=0)
+            y += alpha * p
+            r -= alpha * Ap
+            z = prec(r)
+            rz_new = np.sum(r * z, axis=0)
+            p = z + (rz_new / rz) * p
+            rz = rz_new
+            it += 1
+        return y, it

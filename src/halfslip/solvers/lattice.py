@@ -1,0 +1,664 @@
+"""The general tangential solver: each step is a strictly convex problem on a material lattice.
+
+Formulation (docs/general_solver.md has the derivation and the measurements).
+The surface is divided into cells of width h fixed in space, x_j = (j + 1/2) h
+(both bodies are half-planes: material points do not move). A cell is in
+contact when its centre is inside the contact [L, R]; it carries a constant
+shear q_j and the relative tangential displacement of its centre (physics.md,
+T1 integrated, the datum l of the log kernel):
+
+    g_i = delta - sum_j t_(i-j) q_j + A sigma x_i / 4       (_toeplitz: T symmetric Toeplitz, SPD)
+
+The memory is g_lock, the displacement each cell in contact had at the end of
+the previous step (for a cell arriving during the step: at the instant its
+centre entered the contact, below). Over a step to the loads (P, Q, M, sigma)
+the new q minimises
+
+    1/2 q^T T q + q^T (g_lock - A sigma x / 4)
+    subject to  |q_j| <= f cap_j,  h sum q_j = Q,
+
+cap_j = (1/h) int p over the cell (the end cells reach to the contact edges,
+so that h sum cap = P exactly). The multiplier of the equality is the rigid
+shift delta, and the multipliers of the bounds are the slip increments
+s_j = g_j - g_lock,j: the Karush-Kuhn-Tucker conditions are exactly stick
+(s = 0 where |q| < f cap), Coulomb and the slip direction (q s >= 0). T is
+positive definite, so the solution is unique: any number of stick and slip
+intervals, slip of either sign anywhere.
+
+It is found by the primal-dual active set (the classic rule: a stick cell over
+its bound slips in the direction of its q, a slip cell whose increment opposes
+its direction sticks), warm-started from the previous step's pattern. Each
+iteration solves T on the stick set: one contiguous run by the Gohberg-Semencul
+formula (O(n log n)), several runs by conjugate gradients preconditioned with
+the exact run solves. Should the pattern ever repeat, projected gradient
+iterations (always convergent on a strictly convex problem) give the active set
+a new start. Every step then checks its answer (Coulomb, direction,
+equilibrium, stick) and reports it.
+
+Arrivals (physics.md, first trap): a cell whose centre x enters the contact
+at the left edge during the step locks the displacement it has at that
+instant. Material between x and the old edge L0 arrived earlier and stuck, so
+
+    g_lock(x) = g_0(x) - int_x^L0 inc(xi) dxi
+
+with g_0 the displacement at the start of the step (the potential of the old
+shear) and inc the strain the stuck increments (M1) add at xi up to its own
+arrival (``_general_path.arrival_strains``); mirrored at the right edge.
+
+Error estimate: the step is also taken on a shadow lattice of half the
+resolution carried along in the state; the distance between the two solutions'
+stick edges, relative to the contact width, estimates the fine solution's
+edge error (the edges converge at first order in h).
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..geometry import NormalProblem, NormalSolution
+from ..state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime, StepReport
+from ..state import frozen as _frozen
+from ._general_path import EdgePath, arrival_strains
+from ._toeplitz import ToeplitzLattice, kernel
+from .base import BACKWARD_SLIP, FORWARD_SLIP, OUT_OF_CONTACT, STICK, TangentialSolver
+
+#: Default resolution: cells across the reference contact width (the widest contact of the history).
+DEFAULT_NODES = 1024
+#: Active-set iterations before the projected-gradient restart.
+MAX_ACTIVE_SET = 100
+#: The active set changes a cell only for a violation above this, relative to f max p (Coulomb) and to the
+#: displacement scale A f max p h (slip direction): at a degenerate cell (at the bound and not slipping,
+#: common where old slip zones are re-entered) rounding-level violations of either sign would otherwise
+#: make the pattern chatter (measured on the motor example: excesses of 1e-13 .. 5e-11 f max p, 100
+#: iterations without convergence). Far below CHECK_TOL, which the step's verification applies.
+FLIP_TOL = 1e-10
+#: A step's checks (Coulomb excess and equilibrium relative to f max p and f P; stick and direction
+#: residuals relative to A f max p h) must hold to this: the solves
+#: are exact to rounding (Gohberg-Semencul; CG to 1e-13), so anything larger is a failure.
+CHECK_TOL = 1e-7
+#: Two states are the same (a steady cycle is reached) when their shear agrees to this fraction of
+#: f max p and their locked displacements to this fraction of the largest slip increment of the
+#: step, on the same cells: a repeating active-set pattern reproduces the state to rounding.
+SAME_STATE_TOL = 1e-8
+#: Gauss-Legendre points per cell for the pressure integrals and the arrival integrals.
+CELL_GAUSS = 4
+_GL_T, _GL_W = np.polynomial.legendre.leggauss(CELL_GAUSS)
+_GL_T, _GL_W = 0.5 * (_GL_T + 1.0), 0.5 * _GL_W
+
+
+@dataclass(frozen=True)
+class LatticeMemory:
+    """Immutable memory of the lattice solver.
+
+    Attributes
+    ----------
+    normal : NormalSolution or None
+        Normal solution of the state (None when separated).
+    spacing : float
+        Cell width h [m] (NaN before the first contact).
+    first : int
+        Lattice index of the first cell in contact.
+    status : ndarray of int8, shape (n,)
+        What each cell did in the step that ended here: 0 stuck, +1 / -1 slipped
+        forward / backward (q = +- f cap).
+    q : ndarray, shape (n,)
+        Shear traction of each cell [Pa].
+    g : ndarray, shape (n,)
+        Relative tangential displacement of each cell's centre [m] (consistent with ``shift``).
+    G : ndarray, shape (n,)
+        Slip accumulated since each cell entered contact [m].
+    capacity : ndarray, shape (n,)
+        Mean pressure over each cell (h sum = P) [Pa].
+    shift : float
+        Rigid shift delta of this lattice's solution (datum of the solver) [m].
+    error : float
+        Error estimate of the stick edges, relative to the contact width (NaN without the shadow).
+    coarse : LatticeMemory or None
+        The shadow lattice's memory (half the resolution) for the error estimate.
+    """
+
+    normal: NormalSolution | None
+    spacing: float
+    first: int
+    status: np.ndarray
+    q: np.ndarray
+    g: np.ndarray
+    G: np.ndarray
+    capacity: np.ndarray
+    shift: float = 0.0
+    error: float = math.nan
+    coarse: "LatticeMemory | None" = None
+
+    @property
+    def x(self) -> np.ndarray:
+        """Cell centres [m]."""
+        return (self.first + 0.5 + np.arange(self.q.size)) * self.spacing
+
+
+@dataclass(frozen=True)
+class _Outcome:
+    """One lattice's step: the new memory and what the step did."""
+
+    memory: LatticeMemory
+    shift: float
+    dissipation: float
+    stick: tuple
+    regime: Regime
+    slipped: bool
+    iterations: int
+    residual: float
+    message: str = ""
+
+
+class LatticeSolver(TangentialSolver):
+    """Tangential solver for any profile and all four loads varying.
+
+    Parameters
+    ----------
+    problem : NormalProblem
+    friction : float
+        Coulomb coefficient f.
+    nodes : int
+        Cells across the reference width ``width`` (the lattice spacing is
+        width / nodes for the whole run).
+    stations : array_like, optional
+        Surface points whose accumulated slip :meth:`slip` returns.
+    width : float, optional
+        Reference contact width [m]; by default the width of the first contact.
+    estimate : bool
+        Carry the half-resolution shadow for the per-step error estimate.
+
+    Attributes
+    ----------
+    datum : float
+        Length l of the log-kernel datum of the rigid shift (profile length scale).
+    counters : dict
+        Work done: steps, active-set iterations, CG iterations, restarts, normal solves.
+    """
+
+    name = "general"
+
+    def __init__(self, problem: NormalProblem, friction: float, nodes: int = DEFAULT_NODES, stations=None,
+                 width: float | None = None, estimate: bool = True):
+        self.problem = problem
+        self.f = float(friction)
+        if not self.f > 0.0:
+            raise ValueError(f"friction must be positive, got {friction!r}")
+        self.nodes = int(nodes)
+        if self.nodes < 8:
+            raise ValueError(f"nodes must be at least 8, got {nodes!r}")
+        self.width = None if width is None else float(width)
+        if self.width is not None and not (math.isfinite(self.width) and self.width > 0.0):
+            raise ValueError(f"width must be positive, got {width!r}")
+        self.A = problem.compliance
+        self.datum = problem.profile.length_scale
+        self.stations = None if stations is None else np.asarray(stations, dtype=float)
+        self.estimate = bool(estimate)
+        self._lattices: dict[float, ToeplitzLattice] = {}
+        self.counters = dict.fromkeys(("steps", "iterations", "cg_iterations", "restarts", "normal_solves"), 0)
+
+    # ------------------------------------------------------------------
+    def initial_state(self, t0: float = 0.0) -> ContactState:
+        """Separated, unloaded, no memory."""
+        nan = math.nan
+        return ContactState(float(t0), Loads(0.0, 0.0, 0.0, 0.0), nan, nan, nan, nan, 0.0, 0.0,
+                            _empty(nan, None, 0.0))
+
+    def step(self, state: ContactState, t1: float, loads1: Loads) -> tuple[ContactState, StepReport]:
+        """Advance ``state`` to ``t1`` and ``loads1`` along the straight line in (P, Q, M, sigma)."""
+        self.counters["steps"] += 1
+        loads1 = Loads(*(float(v) for v in loads1))
+        loads0 = state.loads
+        mem = state.memory
+        if loads1 == loads0:
+            regime = Regime.SEPARATED if mem.normal is None else Regime.STICK
+            new = ContactState(float(t1), loads0, state.contact_left, state.contact_right, state.contact_left,
+                               state.contact_right, state.shift, state.dissipation, mem)
+            return new, StepReport(regime, False, False, "")
+        if not loads1.P > 0.0:
+            return self._separate(state, t1, loads1)
+        normal_changed = mem.normal is None or (loads1.P, loads1.M) != (loads0.P, loads0.M)
+        if normal_changed:
+            N1 = self.problem.solve(loads1.P, loads1.M)
+            self.counters["normal_solves"] += 1
+        else:
+            N1 = mem.normal
+        h = mem.spacing
+        if not math.isfinite(h):
+            h = (self.width if self.width is not None else N1.right - N1.left) / self.nodes
+        path = None
+        if normal_changed and (mem.normal is None or N1.left < mem.normal.left or N1.right > mem.normal.right):
+            path = EdgePath(self.problem, mem.normal, N1, loads0, loads1)
+            self.counters["normal_solves"] += path.solves
+        fine = self._take(mem, h, loads0, loads1, N1, path)
+        error = math.nan
+        coarse = None
+        if self.estimate:
+            cmem = mem.coarse
+            if cmem is None or not math.isfinite(cmem.spacing):
+                cmem = _empty(2.0 * h, None, state.shift)
+            rough = self._take(cmem, cmem.spacing, loads0, loads1, N1, path)
+            coarse = rough.memory
+            W = N1.right - N1.left
+            error = max(_apart(a, b) for a, b in zip(fine.stick, rough.stick)) / W
+        memory = dataclasses.replace(fine.memory, error=error, coarse=coarse)
+        new = ContactState(float(t1), loads1, N1.left, N1.right, fine.stick[0], fine.stick[1], fine.shift,
+                           state.dissipation + fine.dissipation, memory)
+        converged = fine.residual <= 1.0
+        message = fine.message
+        if not converged:
+            message = "; ".join(m for m in (message, f"active set not converged (check residual {fine.residual:.3g} "
+                                                      f"x tolerance)") if m)
+        return new, StepReport(fine.regime, fine.slipped, normal_changed, message, converged=converged,
+                               residual=fine.residual, iterations=fine.iterations, error_estimate=error)
+
+    # -- one lattice ----------------------------------------------------------
+    def _lattice(self, h: float, n: int) -> ToeplitzLattice:
+        lat = self._lattices.get(h)
+        if lat is None or lat.size < n:
+            size = max(n, 2 * self.nodes if lat is None else 2 * lat.size)
+            lat = self._lattices[h] = ToeplitzLattice(h, size, self.A)
+        return lat
+
+    def _take(self, mem: LatticeMemory, h: float, loads0: Loads, loads1: Loads,
+              N1: NormalSolution, path: EdgePath | None) -> _Outcome:
+        """The step on the lattice of spacing ``h`` whose memory is ``mem``."""
+        A, f = self.A, self.f
+        first, n = _cells(N1.left, N1.right, h)
+        x = (first + 0.5 + np.arange(n)) * h
+        cap = _capacity(N1, first, n, h)
+        lat = self._lattice(h, n)
+        # what each cell carries into the step
+        old = mem.normal is not None
+        status = np.zeros(n, np.int8)
+        glock = np.empty(n)
+        G = np.zeros(n)
+        cap0 = np.zeros(n)
+        known = np.zeros(n, bool)
+        if old:
+            lo = max(first, mem.first)
+            hi = min(first + n, mem.first + mem.q.size)
+            if hi > lo:
+                a, b = lo - first, hi - first
+                c, d = lo - mem.first, hi - mem.first
+                status[a:b] = mem.status[c:d]
+                glock[a:b] = mem.g[c:d]
+                G[a:b] = mem.G[c:d]
+                cap0[a:b] = mem.capacity[c:d]
+                known[a:b] = True
+        if not np.all(known):
+            glock[~known] = self._arrivals(mem, loads0, loads1, N1, path, x[~known])
+        sigma_term = 0.25 * A * loads1.sigma * x
+        r = glock - sigma_term  # stick: (T q)_i - delta = -r_i
+        qmax = f * cap
+        if abs(loads1.Q) >= f * loads1.P:
+            sgn = 1 if loads1.Q > 0.0 else -1
+            status = np.full(n, sgn, np.int8)
+            q = sgn * qmax
+            Tq = lat.matvec(q)
+            if old:
+                mid = 0.5 * (max(N1.left, mem.normal.left) + min(N1.right, mem.normal.right))
+            else:
+                mid = N1.center
+            k = int(np.clip(np.searchsorted(x, mid), 0, n - 1))
+            delta_int = Tq[k] - r[k]
+            iterations, residual, restarts = 0, 0.0, 0
+            message = GROSS_SLIDING_MESSAGE if abs(loads1.Q) > f * loads1.P * (1.0 + 1e-12) else ""
+        else:
+            q, delta_int, status, Tq, iterations, restarts = self._active_set(lat, n, r, qmax, loads1.Q / h, status,
+                                                                              A * float(qmax.max()) * h)
+            message = ""
+            residual = 0.0
+        self.counters["iterations"] += iterations
+        self.counters["restarts"] += restarts
+        g = delta_int - Tq + sigma_term
+        s = g - glock
+        stick = status == 0
+        slip = ~stick
+        if abs(loads1.Q) < f * loads1.P:
+            residual = _check(q, qmax, s, status, h * float(np.sum(q)), loads1.Q, f * loads1.P, f * float(cap.max()),
+                              A * f * float(cap.max()) * h)
+        g = np.where(stick, glock, g)
+        s = np.where(stick, 0.0, s)
+        dissipation = float(np.sum(f * 0.5 * (cap0 + cap)[slip] * np.abs(s[slip]))) * h
+        G = G + s
+        # the reported shift in the package's datum: delta_l = delta_int + (A/pi) Q ln(l / l_int)
+        Qh = h * float(np.sum(q))
+        shift = delta_int + (A / math.pi) * Qh * math.log(self.datum / lat.datum)
+        memory = LatticeMemory(N1, h, first, _frozen(status), _frozen(q), _frozen(g), _frozen(G), _frozen(cap),
+                               shift)
+        if not np.any(slip):
+            regime, edges = Regime.STICK, (N1.left, N1.right)
+        elif np.all(slip):
+            regime, edges = Regime.GROSS_SLIDING, (math.nan, math.nan)
+        else:
+            regime, edges = Regime.PARTIAL_SLIP, _stick_edges(x, q, qmax, status, N1, h)
+        return _Outcome(memory, shift, dissipation, edges, regime, bool(np.any(slip)), iterations, residual, message)
+
+    def _active_set(self, lat: ToeplitzLattice, n: int, r: np.ndarray, qmax: np.ndarray, total: float,
+                    status: np.ndarray, gscale: float):
+        """Primal-dual active set for min 1/2 q^T T q + q^T r, |q| <= qmax, sum q = total.
+
+        Returns q, the internal shift delta (the equality's multiplier), the
+        final pattern, T q, the iterations and the restarts.
+        """
+        status = status.copy()
+        qscale = float(qmax.max())
+        seen = set()
+        iterations = restarts = 0
+        while True:
+            iterations += 1
+            stick = status == 0
+            if not np.any(stick):
+                status = _reopen(status, qmax, total)
+                stick = status == 0
+            qz = np.where(stick, 0.0, status * qmax)
+            runs = _runs(stick)
+            Tz = lat.matvec(qz)
+            rhs = np.stack((np.ones(int(stick.sum())), -(r + Tz)[stick]), axis=1)
+            y, cg = lat.solve_runs(runs, n, rhs)
+            self.counters["cg_iterations"] += cg
+            delta = (total - qz.sum() - y[:, 1].sum()) / y[:, 0].sum()
+            q = qz.copy()
+            q[stick] = delta * y[:, 0] + y[:, 1]
+            Tq = lat.matvec(q)
+            s = delta - Tq - r  # slip increment g - g_lock (internal datum)
+            new = status.copy()
+            over = stick & (np.abs(q) > qmax + FLIP_TOL * qscale)
+            new[over] = np.sign(q[over]).astype(np.int8)
+            back = ~stick & (status * s < -FLIP_TOL * gscale)
+            new[back] = 0
+            if np.array_equal(new, status):
+                return q, delta, status, Tq, iterations, restarts
+            key = new.tobytes()
+            if key in seen or iterations >= MAX_ACTIVE_SET * (restarts + 1):
+                restarts += 1
+                if restarts > 3:
+                    return q, delta, status, Tq, iterations, restarts
+                new = _projected_gradient(lat, n, r, qmax, total, q)
+                seen.clear()
+            seen.add(key)
+            status = new
+
+    # -- arrivals ---------------------------------------------------------------
+    def _arrivals(self, mem: LatticeMemory, loads0: Loads, loads1: Loads, N1: NormalSolution,
+                  path: EdgePath | None, xs: np.ndarray) -> np.ndarray:
+        """Locked displacement of cells whose centres ``xs`` enter the contact during the step."""
+        A = self.A
+        if path is None:
+            path = EdgePath(self.problem, mem.normal, N1, loads0, loads1)
+        out = np.empty(xs.size)
+        if mem.normal is not None:
+            # the displacement at the start of the step, from the old shear (package datum)
+            xo = mem.x
+            g0 = (mem.shift - kernel(xs[:, None] - xo[None, :], mem.spacing, self.datum, A) @ mem.q
+                  + 0.25 * A * loads0.sigma * xs)
+            for side, edge in ((-1, mem.normal.left), (1, mem.normal.right)):
+                mask = (xs < mem.normal.center) if side < 0 else (xs >= mem.normal.center)
+                if np.any(mask):
+                    out[mask] = g0[mask] + side * _integrate(path, xs[mask], edge, side, A, None)
+            return out
+        lam0 = path.lam_lo
+        left, right = path.edges(np.array(lam0))
+        xf = 0.5 * (float(left) + float(right))
+        sig0 = loads0.sigma + lam0 * (loads1.sigma - loads0.sigma)
+        gf = mem.shift + 0.25 * A * sig0 * xf
+        for side in (-1, 1):
+            mask = (xs < xf) if side < 0 else (xs >= xf)
+            if np.any(mask):
+                out[mask] = gf + side * _integrate(path, xs[mask], xf, side, A, (loads0, loads1))
+        return out
+
+    def _separate(self, state, t1, loads1):
+        """All memory lost; the shift keeps g at the old contact centre."""
+        mem = state.memory
+        shift = state.shift
+        if mem.normal is not None:
+            c = mem.normal.center
+            shift = float(np.interp(c, mem.x, mem.g)) - 0.25 * self.A * state.loads.sigma * c
+        nan = math.nan
+        message = f"separated (P <= 0): shear force Q = {loads1.Q:g} N/m not carried" if loads1.Q != 0.0 else ""
+        coarse = None if mem.coarse is None else _empty(mem.coarse.spacing, None, shift)
+        new = ContactState(float(t1), loads1, nan, nan, nan, nan, shift, state.dissipation,
+                           _empty(mem.spacing, coarse, shift))
+        return new, StepReport(Regime.SEPARATED, False, mem.normal is not None, message)
+
+    # -- the step contract's queries ------------------------------------------------
+    def stick_intervals(self, state: ContactState) -> int:
+        """Number of stick intervals (runs of stuck cells)."""
+        mem = state.memory
+        if mem.normal is None:
+            return 0
+        return len(_runs(mem.status == 0))
+
+    def station_states(self, state: ContactState, x: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """Out of contact / stick / forward / backward slip at surface points, from the cells."""
+        mem = state.memory
+        x = np.asarray(x, dtype=float)
+        codes = np.full(x.shape, OUT_OF_CONTACT, np.int8)
+        if mem.normal is None:
+            return codes
+        inside = (x >= mem.normal.left) & (x <= mem.normal.right)
+        j = np.clip(np.floor(x / mem.spacing).astype(np.int64) - mem.first, 0, mem.q.size - 1)
+        st = mem.status[j]
+        codes[inside & (st == 0)] = STICK
+        codes[inside & (st > 0)] = FORWARD_SLIP
+        codes[inside & (st < 0)] = BACKWARD_SLIP
+        return codes
+
+    def state_difference(self, a: ContactState, b: ContactState) -> float:
+        """How far apart two states are, relative to :data:`SAME_STATE_TOL` (inf: different cells)."""
+        ma, mb = a.memory, b.memory
+        if (ma.normal is None) != (mb.normal is None):
+            return math.inf
+        if ma.normal is None:
+            return 0.0
+        if ma.first != mb.first or ma.q.size != mb.q.size or ma.spacing != mb.spacing:
+            return math.inf
+        qs = self.f * max(float(ma.capacity.max()), float(mb.capacity.max()))
+        dq = float(np.max(np.abs(ma.q - mb.q))) / qs
+        # displacement scale: what f max p over the contact width moves a surface point by
+        gs = self.A * qs * (ma.normal.right - ma.normal.left)
+        dg = float(np.max(np.abs((ma.g - mb.g) - (a.shift - b.shift)))) / gs
+        return max(dq, dg) / SAME_STATE_TOL
+
+    def same_state(self, a: ContactState, b: ContactState) -> bool:
+        """Whether the two states agree to :data:`SAME_STATE_TOL` on the same cells."""
+        return self.state_difference(a, b) <= 1.0
+
+    def cycle_tolerance(self, state: ContactState) -> float:
+        """Stick edges of a steady cycle repeat to rounding: a thousandth of a cell [m]."""
+        return 1e-3 * state.memory.spacing
+
+    # -- output -------------------------------------------------------------------
+    def tractions(self, memory: LatticeMemory, x) -> tuple[np.ndarray, np.ndarray]:
+        """Pressure p(x) and shear q(x) [Pa]: q = (q_j / cap_j) p within cell j (so |q| <= f p)."""
+        x = np.asarray(x, dtype=float)
+        if memory.normal is None:
+            return np.zeros(x.shape), np.zeros(x.shape)
+        p = memory.normal.pressure(x)
+        j = np.clip(np.floor(x / memory.spacing).astype(np.int64) - memory.first, 0, memory.q.size - 1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            chi = np.where(memory.capacity > 0.0, memory.q / memory.capacity, 0.0)
+        return p, chi[j] * p
+
+    def shear_force(self, memory: LatticeMemory) -> float:
+        """int q dx of the state [N/m]."""
+        if memory.normal is None:
+            return 0.0
+        return memory.spacing * float(np.sum(memory.q))
+
+    def slip(self, memory: LatticeMemory) -> np.ndarray:
+        """Slip accumulated at the stations since each entered contact [m]; NaN outside contact."""
+        if self.stations is None:
+            raise ValueError("slip is tracked only when the solver is built with stations")
+        out = np.full(self.stations.shape, np.nan)
+        if memory.normal is None:
+            return out
+        inside = (self.stations >= memory.normal.left) & (self.stations <= memory.normal.right)
+        out[inside] = np.interp(self.stations[inside], memory.x, memory.G)
+        return out
+
+
+# ---------------------------------------------------------------------------
+def _empty(spacing: float, coarse, shift: float) -> LatticeMemory:
+    e = _frozen(np.zeros(0))
+    return LatticeMemory(None, spacing, 0, _frozen(np.zeros(0, np.int8)), e, e, e, e, shift, math.nan, coarse)
+
+
+def _cells(L: float, R: float, h: float) -> tuple[int, int]:
+    """First lattice index and number of cells whose centres lie inside (L, R) (at least one)."""
+    j0 = math.floor(L / h - 0.5) + 1
+    j1 = math.ceil(R / h - 0.5) - 1
+    if j1 < j0:
+        j0 = j1 = math.floor(0.5 * (L + R) / h)
+    return j0, j1 - j0 + 1
+
+
+def _capacity(N: NormalSolution, first: int, n: int, h: float) -> np.ndarray:
+    """(1/h) int p over each cell, the end cells extended to the contact edges (h sum = P).
+
+    In x = c - d cos(theta) the integrand p d sin(theta) is smooth up to the
+    edges (p vanishes like a square root there): Gauss-Legendre in theta.
+    """
+    c, d = N.center, N.half_width
+    bounds = np.concatenate(([N.left], (first + 1 + np.arange(n - 1)) * h, [N.right]))
+    th = np.arccos(np.clip((c - bounds) / d, -1.0, 1.0))
+    lo, span = th[:-1], np.diff(th)
+    t = lo[:, None] + span[:, None] * _GL_T[None, :]
+    xq = c - d * np.cos(t)
+    vals = N.pressure(xq) * d * np.sin(t)
+    cap = (vals @ _GL_W) * span / h
+    total = float(np.sum(cap)) * h
+    if total > 0.0:
+        cap *= N.P / total  # the quadrature's own error (~1e-10 of P) would otherwise show in gross sliding
+    return cap
+
+
+def _integrate(path: EdgePath, xs: np.ndarray, edge: float, side: int, A: float, formation) -> np.ndarray:
+    """int between ``edge`` and each of ``xs`` (outward on ``side``) of the arrival strain.
+
+    Without ``formation``: the stuck increments only (their strain at the
+    start is in g_0). With ``formation`` = (loads0, loads1): the whole strain
+    on arrival (A sigma / 4 at the arrival instant plus the increments).
+    """
+    order = np.argsort(side * xs)
+    xsorted = xs[order]
+    ends = np.concatenate(([edge], xsorted))
+    a, b = ends[:-1], ends[1:]
+    pts = a[:, None] + (b - a)[:, None] * _GL_T[None, :]
+    flat = pts.ravel()
+    inc, _ = arrival_strains(path, flat, side, A)
+    if formation is not None:
+        l0, l1 = formation
+        lam = path.arrival(flat, side)
+        inc = inc + 0.25 * A * (l0.sigma + lam * (l1.sigma - l0.sigma))
+    seg = (inc.reshape(pts.shape) @ _GL_W) * np.abs(b - a)
+    out = np.empty(xs.size)
+    out[order] = np.cumsum(seg)
+    return out
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """Half-open (start, stop) of the runs of True in ``mask``."""
+    m = np.concatenate(([False], mask, [False])).astype(np.int8)
+    d = np.diff(m)
+    starts = np.flatnonzero(d == 1)
+    stops = np.flatnonzero(d == -1)
+    return list(zip(starts.tolist(), stops.tolist()))
+
+
+def _reopen(status: np.ndarray, qmax: np.ndarray, total: float) -> np.ndarray:
+    """All cells slip but the bounds cannot carry ``total`` with these signs: stick the cell nearest the middle
+    of the cells whose direction carries the excess (equilibrium needs a free cell)."""
+    status = status.copy()
+    excess = float(np.sum(status * qmax)) - total
+    cand = np.flatnonzero(status == (1 if excess > 0 else -1))
+    if cand.size == 0:
+        cand = np.arange(status.size)
+    status[cand[cand.size // 2]] = 0
+    return status
+
+
+def _projected_gradient(lat: ToeplitzLattice, n: int, r: np.ndarray, qmax: np.ndarray, total: float,
+                        q0: np.ndarray, iterations: int = 2000) -> np.ndarray:
+    """Accelerated projected gradient (FISTA) for the step problem; returns its active pattern.
+
+    Always convergent on a strictly convex problem; used only to restart the
+    active set when its pattern repeats.
+    """
+    L = float(np.sum(np.abs(lat.t[:n]))) * 2.0  # bound on the largest eigenvalue (Gershgorin)
+    q = _project(np.clip(q0, -qmax, qmax), qmax, total)
+    y, tk = q.copy(), 1.0
+    for _ in range(iterations):
+        grad = lat.matvec(y) + r
+        q_new = _project(y - grad / L, qmax, total)
+        t_new = 0.5 * (1.0 + math.sqrt(1.0 + 4.0 * tk * tk))
+        y = q_new + ((tk - 1.0) / t_new) * (q_new - q)
+        q, tk = q_new, t_new
+    status = np.zeros(n, np.int8)
+    tight = 1e-9 * float(qmax.max())
+    status[q >= qmax - tight] = 1
+    status[q <= -qmax + tight] = -1
+    return status
+
+
+def _project(v: np.ndarray, qmax: np.ndarray, total: float) -> np.ndarray:
+    """Projection onto {|q| <= qmax, sum q = total}: clip(v - mu) with mu by bisection."""
+    lo, hi = float(np.min(v - qmax)) - 1.0, float(np.max(v + qmax)) + 1.0
+    for _ in range(200):
+        mu = 0.5 * (lo + hi)
+        if np.sum(np.clip(v - mu, -qmax, qmax)) > total:
+            lo = mu
+        else:
+            hi = mu
+    return np.clip(v - 0.5 * (lo + hi), -qmax, qmax)
+
+
+def _check(q, qmax, s, status, force, Q, fP, qscale, gscale) -> float:
+    """The step's own verification, relative to CHECK_TOL: Coulomb (relative to f max p), slip direction
+    and stick (relative to A f max p h, the displacement a cell's bound shear makes), equilibrium (f P)."""
+    stick = status == 0
+    scale_s = gscale
+    coulomb = float(np.max(np.abs(q) - qmax, initial=0.0)) / qscale
+    direction = float(np.max(-(status * s)[~stick], initial=0.0)) / scale_s
+    stuck = float(np.max(np.abs(s[stick]), initial=0.0)) / scale_s
+    equilibrium = abs(force - Q) / fP
+    return max(coulomb, direction, stuck, equilibrium) / CHECK_TOL
+
+
+def _stick_edges(x, q, qmax, status, N: NormalSolution, h: float) -> tuple[float, float]:
+    """Outermost stick points, within the cell: the Coulomb margin m = 1 - s q / (f cap) of the
+    outermost stick cells vanishes like the square root of the distance to the edge, so m^2 is
+    extrapolated linearly from the two outermost stick cells (clipped to the half-cells between the
+    stick cell's centre and its slipping neighbour's); a stick run reaching the end cell ends at the
+    contact edge."""
+    idx = np.flatnonzero(status == 0)
+    i, k = int(idx[0]), int(idx[-1])
+    out = []
+    for end, step, edge in ((i, 1, N.left), (k, -1, N.right)):
+        nb = end - step
+        if nb < 0 or nb >= x.size:
+            out.append(edge)
+            continue
+        sgn = int(status[nb])
+        m0 = 1.0 - sgn * q[end] / qmax[end] if qmax[end] > 0 else 0.0
+        inner = end + step
+        if 0 <= inner < x.size and status[inner] == 0 and qmax[inner] > 0:
+            m1 = 1.0 - sgn * q[inner] / qmax[inner]
+        else:
+            m1 = m0
+        m0, m1 = max(m0, 0.0) ** 2, max(m1, 0.0) ** 2
+        frac = m0 / (m1 - m0) if m1 > m0 else 1.0
+        frac = min(max(frac, 0.0), 1.0)
+        out.append(x[end] - step * frac * h)
+    return out[0], out[1]
+
+
+def _apart(u: float, v: float) -> float:
+    if math.isnan(u) or math.isnan(v):
+        return 0.0 if math.isnan(u) and math.isnan(v) else math.inf
+    return abs(u - v)
