@@ -83,6 +83,12 @@ def _levinson(t: np.ndarray, n: int):  # pragma: no cover - compiled
     return B, eps
 
 
+#: Solve a stick set of several runs through the Schur complement of the gaps between them while the
+#: gaps hold at most this many cells (the complement is dense: GAP_CELLS^2 numbers, one solve per gap
+#: cell); wider gaps separate few runs, for which block-Jacobi CG converges in a few iterations.
+GAP_CELLS = 48
+
+
 class ToeplitzLattice:
     """T of a uniform lattice of ``size`` cells: products, and solves on contiguous runs.
 
@@ -169,9 +175,35 @@ class ToeplitzLattice:
                    max_iter: int = 200) -> tuple[np.ndarray, int]:
         """T_SS^-1 rhs on the stick set S = union of ``runs`` (half-open (start, stop) in 0..n).
 
-        One run: a direct Gohberg-Semencul solve. Several: conjugate gradients
-        preconditioned with the exact solve of every run (block Jacobi), the
+        One run: a direct Gohberg-Semencul solve. Several runs with at most
+        GAP_CELLS cells between them: exactly, by the Schur complement of the
+        gaps Z in the spanning run (T_SS^-1 b = (T^-1 b~ - X C^-1 (T^-1 b~)_Z)_S,
+        X = T^-1 E_Z, C = X_Z, all solves on the span). Otherwise: conjugate
+        gradients preconditioned with the exact solve of every run (block
+        Jacobi; the runs are then few and far apart, so few iterations), the
         products with T over the n cells by FFT. ``rhs`` has shape (|S|, k).
+"""
+        if len(runs) == 1:
+            return self.solve(runs[0][1] - runs[0][0], rhs), 0
+        a, b = runs[0][0], runs[-1][1]
+        gaps = np.concatenate([np.arange(runs[i][1], runs[i + 1][0]) for i in range(len(runs) - 1)]) - a
+        if gaps.size <= GAP_CELLS:
+            m = b - a
+            stick = np.ones(m, bool)
+            stick[gaps] = False
+            E = np.zeros((m, gaps.size))
+            E[gaps, np.arange(gaps.size)] = 1.0
+            wide = np.zeros((m, rhs.shape[1]))
+            wide[stick] = rhs
+            sol = self.solve(m, np.concatenate((E, wide), axis=1))
+            X, Y = sol[:, :gaps.size], sol[:, gaps.size:]
+            C = X[gaps]
+            Y = Y - X @ np.linalg.solve(C, Y[gaps])
+            return Y[stick], 0
+        return self._cg_runs(runs, n, rhs, tol, max_iter)
+
+    def _cg_runs(self, runs, n, rhs, tol, max_iter):
+        """Block-Jacobi preconditioned CG on the union of ``runs`` (see :meth:`solve_runs`).
 
         Returns
         -------
@@ -179,8 +211,6 @@ class ToeplitzLattice:
         iterations : int
             CG iterations (0 for one run).
         """
-        if len(runs) == 1:
-            return self.solve(runs[0][1] - runs[0][0], rhs), 0
         idx = np.concatenate([np.arange(a, b) for a, b in runs])
         cuts = np.cumsum([0] + [b - a for a, b in runs])
 

@@ -1,0 +1,200 @@
+"""The general solver on the seeded random (P, Q, M, sigma) histories, against the self-converged reference.
+
+    python benchmarks/bench_general_random.py                    # nodes 256 .. 2048, both geometries, 2 seeds
+    python benchmarks/bench_general_random.py --nodes 1024 --baseline 1000 2000
+                                                                 # + the IC baseline timed in the same run
+
+Accuracy: stick edges (outermost, relative to the contact width) and the
+final cumulative dissipation against benchmarks/reference/random_reference.npz
+(the IC baseline self-converged at N = 1000..8000, its own error stated there).
+Speed: the solver's step() alone (normal solves included, no output), per
+step, the median of ``--repeat`` passes. With ``--baseline N ...`` the IC
+baseline (benchmarks/baseline_ic.py) runs on the same histories in the same
+process, so the ratio of times is measured in one run on one machine.
+Writes the table between the markers in docs/benchmarks.md.
+"""
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import argparse
+import math
+import platform
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+sys.path.insert(0, str(HERE))
+
+from random_histories import random_history  # noqa: E402
+
+REFERENCE = HERE / "reference" / "random_reference.npz"
+DOC = ROOT / "docs" / "benchmarks.md"
+BEGIN, END = "<!-- general_random: begin -->", "<!-- general_random: end -->"
+
+
+def run_solver(geometry, seed, nodes, repeat=1, estimate=True):
+    """Step the package's general solver through one history; per-step records and the best wall time."""
+    from halfslip.simulator import reference_width
+    from halfslip.solvers.lattice import LatticeSolver
+    from halfslip.state import Loads
+
+    info = {}
+    scene, t, P, Q, M, S = random_history(seed, geometry, info=info)
+    problem = info["problem"]
+    width = reference_width(scene, problem)
+    best = math.inf
+    for _ in range(repeat):
+        solver = LatticeSolver(problem, info["friction"], nodes, width=width, estimate=estimate)
+        solver._lattice(width / nodes, nodes + 8)  # the lattice set-up (once per run) is not a step
+        if estimate:
+            solver._lattice(2 * width / nodes, nodes // 2 + 8)
+        state = solver.initial_state(t[0])
+        rec = {k: [] for k in ("contact_left", "contact_right", "stick_left", "stick_right", "intervals",
+                               "dissipation", "converged", "error", "iterations")}
+        started = time.perf_counter()
+        for i in range(1, t.size):
+            state, rep = solver.step(state, t[i], Loads(P[i], Q[i], M[i], S[i]))
+            rec["contact_left"].append(state.contact_left)
+            rec["contact_right"].append(state.contact_right)
+            rec["stick_left"].append(state.stick_left)
+            rec["stick_right"].append(state.stick_right)
+            rec["intervals"].append(solver.stick_intervals(state))
+            rec["dissipation"].append(state.dissipation)
+            rec["converged"].append(rep.converged)
+            rec["error"].append(rep.error_estimate)
+            rec["iterations"].append(rep.iterations)
+        best = min(best, time.perf_counter() - started)
+    out = {k: np.asarray(v) for k, v in rec.items()}
+    out["wall"] = best
+    out["steps"] = t.size - 1
+    return out
+
+
+def run_baseline(geometry, seed, n):
+    from baseline_ic import history_extent, run_history
+
+    info = {}
+    _, t, P, Q, M, S = random_history(seed, geometry, info=info)
+    extent = history_extent(info["problem"], P, M)
+    started = time.perf_counter()
+    out = run_history(info["problem"], info["friction"], n, P, Q, M, S, extent=extent)
+    wall = time.perf_counter() - started
+    rec = {k: np.asarray(out[k]) for k in ("contact_left", "contact_right", "stick_left", "stick_right",
+                                           "intervals", "dissipation", "converged")}
+    rec["wall"] = wall
+    rec["steps"] = t.size - 1
+    return rec
+
+
+def compare(run, ref, key):
+    """Edge errors / width (pooled over both sides and the steps where both have a stick zone), the
+    relative error of the final dissipation, interval-count disagreements, failed steps."""
+    W = ref[key + "contact_right"] - ref[key + "contact_left"]
+    errs = []
+    for side in ("stick_left", "stick_right"):
+        a, b = run[side], ref[key + side]
+        ok = np.isfinite(a) & np.isfinite(b)
+        errs.append(np.abs(a[ok] - b[ok]) / W[ok])
+    errs = np.concatenate(errs)
+    mismatch = int(np.sum(np.isfinite(run["stick_left"]) != np.isfinite(ref[key + "stick_left"])))
+    d_ref = float(ref[key + "dissipation_extrapolated"][-1])
+    diss = abs(float(run["dissipation"][-1]) - d_ref) / d_ref
+    intervals = int(np.sum(run["intervals"] != ref[key + "intervals"]))
+    failed = int(np.sum(~run["converged"].astype(bool)))
+    return errs, mismatch, diss, intervals, failed
+
+
+def machine():
+    import numba
+    import scipy
+
+    cpu = platform.processor() or platform.machine()
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return (f"{cpu}, {os.cpu_count()} cores (shared), Python {platform.python_version()}, numpy {np.__version__}, "
+            f"scipy {scipy.__version__}, numba {numba.__version__}, OPENBLAS_NUM_THREADS="
+            f"{os.environ.get('OPENBLAS_NUM_THREADS')}")
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--nodes", type=int, nargs="+", default=[256, 512, 1024, 2048])
+    ap.add_argument("--seeds", type=int, default=2)
+    ap.add_argument("--geometries", nargs="+", default=["hertz", "punch"])
+    ap.add_argument("--repeat", type=int, default=1)
+    ap.add_argument("--baseline", type=int, nargs="*", default=[], help="IC baseline N to time in this run")
+    ap.add_argument("--no-doc", action="store_true")
+    args = ap.parse_args(argv)
+    ref = np.load(REFERENCE)
+    rows = []
+    for nodes in args.nodes:
+        for g in args.geometries:
+            pooled, mism, diss, inter, failed, wall, steps, est = [], 0, [], 0, 0, 0.0, 0, []
+            for seed in range(args.seeds):
+                run = run_solver(g, seed, nodes, args.repeat)
+                e, m, d, i, f = compare(run, ref, f"{g}_{seed}_")
+                pooled.append(e)
+                mism, inter, failed = mism + m, inter + i, failed + f
+                diss.append(d)
+                wall += run["wall"]
+                steps += run["steps"]
+                est.append(run["error"][np.isfinite(run["error"])])
+            e = np.concatenate(pooled)
+            est = np.concatenate(est)
+            rows.append(("halfslip general", nodes, g, np.median(e), np.percentile(e, 95), e.max(), max(diss),
+                         mism, inter, failed, 1e3 * wall / steps, np.percentile(est, 95)))
+            print(_fmt(rows[-1]), flush=True)
+    for n in args.baseline:
+        for g in args.geometries:
+            pooled, mism, diss, inter, failed, wall, steps = [], 0, [], 0, 0, 0.0, 0
+            for seed in range(args.seeds):
+                run = run_baseline(g, seed, n)
+                e, m, d, i, f = compare(run, ref, f"{g}_{seed}_")
+                pooled.append(e)
+                mism, inter, failed = mism + m, inter + i, failed + f
+                diss.append(d)
+                wall += run["wall"]
+                steps += run["steps"]
+            e = np.concatenate(pooled)
+            rows.append(("IC baseline", n, g, np.median(e), np.percentile(e, 95), e.max(), max(diss), mism, inter,
+                         failed, 1e3 * wall / steps, math.nan))
+            print(_fmt(rows[-1]), flush=True)
+    if not args.no_doc:
+        write_doc(rows, args, " ".join(sys.argv[1:]))
+
+
+def _fmt(r):
+    return (f"| {r[0]} | {r[1]} | {r[2]} | {r[3]:.1e} | {r[4]:.1e} | {r[5]:.1e} | {100 * r[6]:.2f} % | {r[7]} | "
+            f"{r[8]} | {r[9]} | {r[10]:.2f} | {'' if math.isnan(r[11]) else f'{r[11]:.1e}'} |")
+
+
+def write_doc(rows, args, argv):
+    head = ("| solver | nodes / N | geometry | edge error median | 95th pct | max | final dissipation error | "
+            "stick/no-stick mismatches | interval-count mismatches | failed steps | ms / step | "
+            "error estimate 95th pct |\n|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    text = (f"{BEGIN}\nMeasured with `python benchmarks/bench_general_random.py {argv}` on {time.strftime('%Y-%m-%d')}; "
+            f"machine: {machine()}. Seeds 0..{args.seeds - 1} per geometry (112 steps each); errors against "
+            f"benchmarks/reference/random_reference.npz (edges relative to the contact width; dissipation "
+            f"against the reference's Richardson value).\n\n{head}\n" + "\n".join(_fmt(r) for r in rows) + f"\n{END}")
+    doc = DOC.read_text()
+    if BEGIN in doc:
+        doc = doc[:doc.index(BEGIN)] + text + doc[doc.index(END) + len(END):]
+    else:
+        doc = doc.rstrip() + "\n\n## The general solver on random histories (issue 14)\n\n" + text + "\n"
+    DOC.write_text(doc)
+
+
+if __name__ == "__main__":
+    main()
