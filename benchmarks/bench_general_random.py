@@ -42,7 +42,7 @@ BEGIN, END = "<!-- general_random: begin -->", "<!-- general_random: end -->"
 def run_solver(geometry, seed, nodes, repeat=1, estimate=True):
     """Step the package's general solver through one history; per-step records and the best wall time."""
     from halfslip.simulator import reference_width
-    from halfslip.solvers.lattice import LatticeSolver
+    from halfslip.solvers.general import GeneralSolver as LatticeSolver
     from halfslip.state import Loads
 
     info = {}

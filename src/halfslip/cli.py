@@ -438,6 +438,16 @@ def summarize(result, path) -> list[str]:
                      f"(first at t = {t_bad[0]:.6g} s, worst at t = {t_bad[worst]:.6g} s, residual "
                      f"{residual[worst]:.3g} x tolerance); their results are the closest found "
                      "(variables converged, residual)")
+    if result.attrs.get("method") == "general" and "error_estimate" in result:
+        est = result["error_estimate"].values
+        est = est[np.isfinite(est)]
+        if est.size:
+            tol = result.attrs.get("solver_tol")
+            over = int(np.sum(est > tol)) if tol is not None else 0
+            lines.append(f"  stick-edge error estimate: median {np.median(est):.2g}, 95th percentile "
+                         f"{np.percentile(est, 95):.2g}, largest {est.max():.2g} of the contact width"
+                         + (f" (solver.tol {tol:g}: {over} of {est.size} stored steps above)" if tol is not None
+                            else ""))
     # one note per kind of solver message: how many, the first and the worst step (halfslip.messages)
     for line in message_summary(result):
         lines.append(f"  note: {line}")

@@ -246,14 +246,11 @@ _ARRAY_KINDS = "biuf"  # bool, signed and unsigned integers, floats: numbers onl
 def _record_kinds() -> dict:
     """The record kinds a checkpoint may hold: kind name -> class (dataclass or named tuple)."""
     from .geometry import NormalSolution, _ContactPressure
-    from .solvers._general_zones import Config, Shear
     from .solvers.exact import LevelMemory
     from .solvers.general import GeneralMemory
-    from .solvers.lattice import LatticeMemory
     from .state import ContactState, Loads
 
-    classes = (ContactState, Loads, NormalSolution, _ContactPressure, LevelMemory, GeneralMemory, Config, Shear,
-               LatticeMemory)
+    classes = (ContactState, Loads, NormalSolution, _ContactPressure, LevelMemory, GeneralMemory)
     return {cls.__name__.lstrip("_"): cls for cls in classes}
 
 

@@ -15,6 +15,7 @@ Paths inside a scene (table and profile files) are relative to the scene file.
 """
 from __future__ import annotations
 
+import math
 import os
 import re
 from collections.abc import Mapping
@@ -51,7 +52,11 @@ GEOMETRY_KINDS = ("hertz", "rounded_punch", "profile")
 
 _SCENE_KEYS = ("name", "material", "friction", "geometry", "loads", "solver", "output")
 _REQUIRED_KEYS = ("material", "friction", "geometry", "loads")
-_SOLVER_KEYS = ("method", "nodes", "skip_steady_cycles", "edge_travel")
+_SOLVER_KEYS = ("method", "tol", "nodes", "skip_steady_cycles", "edge_travel")
+
+#: The general solver's stick edges are within about this many cells (contact width / nodes) of the
+#: converged ones in the median (random histories, docs/general_solver.md): nodes = ceil(NODES_PER_TOL / tol).
+NODES_PER_TOL = 0.1
 _OUTPUT_KEYS = ("fields", "every", "points")
 
 
@@ -66,22 +71,34 @@ class SolverOptions:
         'general' the discretised slip solver, 'auto' picks the exact one
         whenever it applies.
     nodes : int
-        Resolution of the general solver, >= 8.
+        Resolution of the general solver, >= 8: cells across the widest contact
+        of the history (the lower-level knob; when given it overrides ``tol``).
     skip_steady_cycles : bool
         Stop marching a periodic segment once its cycle repeats.
     edge_travel : float or None
         Step-size control of the general solver: a slipping step over which a
-        stick edge travels more than this fraction of the contact width is
-        taken in halves (up to 16 sub-steps). None (the default) is off.
+        contact edge travels more than this fraction of the contact width is
+        taken in equal sub-steps (up to 64). None: the solver's default (0.01).
+    tol : float
+        Accuracy asked of the general solver: its stick edges, in units of the
+        contact width (default 1e-4). It sets ``nodes`` when ``nodes`` is not
+        given: nodes = ceil(NODES_PER_TOL / tol).
     """
 
     method: str = "auto"
-    nodes: int = 512
+    nodes: int | None = None
     skip_steady_cycles: bool = True
     edge_travel: float | None = None
+    tol: float = 1e-4
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "method", check_choice(self.method, "solver.method", METHODS))
+        object.__setattr__(self, "tol", check_number(self.tol, "solver.tol", positive=True))
+        if not self.tol < 0.1:
+            raise HalfslipInputError(f"must be below 0.1 (a fraction of the contact width), got {self.tol:g}",
+                                     field="solver.tol")
+        if self.nodes is None:
+            object.__setattr__(self, "nodes", max(8, math.ceil(NODES_PER_TOL / self.tol)))
         object.__setattr__(self, "nodes", check_count(self.nodes, "solver.nodes", minimum=8))
         check_bool(self.skip_steady_cycles, "solver.skip_steady_cycles")
         if self.edge_travel is not None:

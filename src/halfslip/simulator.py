@@ -103,10 +103,10 @@ def build_method(scene, name: str, problem: NormalProblem, stations: np.ndarray 
         from .solvers.exact import ExactMemory
 
         return ExactMemory(problem, scene.friction, P_max, stations=stations)
-    from .solvers.lattice import LatticeSolver
+    from .solvers.general import GeneralSolver
 
-    return LatticeSolver(problem, scene.friction, scene.solver.nodes, stations=stations,
-                         width=reference_width(scene, problem))
+    return GeneralSolver(problem, scene.friction, scene.solver.nodes, stations=stations,
+                         width=reference_width(scene, problem), travel=scene.solver.edge_travel)
 
 
 #: Load samples of the history at which the reference contact width is taken (with the largest P).
@@ -167,7 +167,7 @@ class _Records:
 
     names = ("t", "step", "P", "Q", "M", "sigma", "contact_left", "contact_right",
              "stick_left", "stick_right", "regime", "rigid_shift", "dissipation", "converged", "residual",
-             "stick_intervals")
+             "error_estimate", "stick_intervals")
 
     def __init__(self):
         self.chunks = {k: [] for k in self.names}
@@ -181,7 +181,7 @@ class _Records:
                 self.buffer[k] = []
 
     def add(self, step: int, state: ContactState, regime: Regime, converged: bool = True, residual: float = 0.0,
-            stick_intervals: int = 1):
+            stick_intervals: int = 1, error_estimate: float = 0.0):
         c = self.buffer
         c["t"].append(state.t)
         c["step"].append(step)
@@ -196,6 +196,7 @@ class _Records:
         c["dissipation"].append(state.dissipation)
         c["converged"].append(int(converged))
         c["residual"].append(residual)
+        c["error_estimate"].append(error_estimate)
         c["stick_intervals"].append(stick_intervals)
 
     def add_steps(self, steps: dict, mask: np.ndarray):
@@ -203,6 +204,7 @@ class _Records:
         self._flush()
         n = len(mask)
         defaults = {"converged": np.ones(n, np.int8), "residual": np.zeros(n),  # an exact marcher: always met
+                    "error_estimate": np.zeros(n),
                     "stick_intervals": np.isfinite(np.asarray(steps["stick_left"], float)).astype(np.int8)}
         for k in self.names:
             self.chunks[k].append(np.asarray(steps.get(k, defaults.get(k)), _dtype(k))[mask])
@@ -385,8 +387,8 @@ class _Run:
         return sum(skip.count * segments[k].steps_per_cycle for k, skip in self.skip.skipped.items())
 
     def _store(self, i: int, state: ContactState, regime: Regime, converged: bool = True,
-               residual: float = 0.0) -> None:
-        self.rec.add(i, state, regime, converged, residual, self.solver.stick_intervals(state))
+               residual: float = 0.0, error_estimate: float = 0.0) -> None:
+        self.rec.add(i, state, regime, converged, residual, self.solver.stick_intervals(state), error_estimate)
         if self.save.fields:
             self.rec.add_fields(_fields(self.solver, state, self.save))
 
@@ -414,7 +416,8 @@ class _Run:
             self.skip, jump = self.skipper.check(self.skip, i, state)
         # a failed step is always stored, and so is the last marched step before a skip
         if self.save.stored(i, n) or jump is not None or not report.converged:
-            self._store(i, state, report.regime, report.converged, report.residual)
+            error = report.error_estimate if self.name == "general" else 0.0
+            self._store(i, state, report.regime, report.converged, report.residual, error)
         self.i, self.state = (i, state) if jump is None else jump
 
     def _advance_chunk(self) -> None:
@@ -480,6 +483,8 @@ class _Run:
             }
         )
         if self.name == "general":
+            ds.attrs["solver_tol"] = scene.solver.tol
+            ds.attrs["solver_nodes"] = scene.solver.nodes
             spacings = slip_zone_spacings(ds, scene.solver.nodes)
             ds.attrs["widest_slip_zone_spacings"] = spacings
             if 0.0 < spacings < RESOLVED_SPACINGS:

@@ -13,9 +13,8 @@ A sigma'/4 from T1). Hence, exactly,
 
     E_arr(x) = Delta-eps_0(x) + int_{lam_lo}^{lam_x} A sgn(s)(Q'/pi + sigma' s/4) / sqrt((x - L)(x - R)) dlam,
 
-where Delta-eps_0 is the strain at x at the start of the step: the harmonic
-continuation, outside the old contact [L0, R0], of the locked-in strain E0 on it
-(:func:`outside_strain`). The integrand has an inverse square root at lam_x;
+where Delta-eps_0 is the strain at x at the start of the step (outside the
+old contact). The integrand has an inverse square root at lam_x;
 lam = lam_x - (lam_x - lam_lo) u^2 removes it and Gauss-Legendre in u does the
 rest (tanh-sinh in u, for the weak singularity where contact forms). The same integral without (Q', sigma') and with 1/pi gives the strain a
 unit of extra shear force, spread over the step, would lock in (the "gauge"
@@ -29,7 +28,6 @@ import numpy as np
 
 from ..geometry import NormalProblem, NormalSolution
 from ..state import Loads
-from . import _general_sie as sie
 
 #: tanh-sinh points in u for the arrival integral (step 6 / (ARRIVAL_POINTS - 1) in t).
 ARRIVAL_POINTS = 49
@@ -223,40 +221,3 @@ def arrival_strains(path: EdgePath, x: np.ndarray, side: int, compliance: float
     increment = kernel @ np.full(_U.shape, dQ / math.pi) + (kernel * s).sum(axis=1) * (0.25 * dS)
     gauge = kernel.sum(axis=1) / math.pi
     return increment, gauge
-
-
-def outside_strain(X0: np.ndarray, E0: np.ndarray, x: np.ndarray, n: int) -> np.ndarray:
-    """Relative strain outside the contact [X0[0], X0[-1]] from the locked-in strain on it.
-
-    For a shear traction bounded at both edges, the strain (T1) at |t| > 1 is
-
-        E(edge) + sgn(t) sqrt(t^2 - 1) (1/pi) int (E(s) - E(edge)) / ((t - s) sqrt(1 - s^2)) ds
-
-    (the sigma term cancels), evaluated here by n-point Gauss-Chebyshev
-    quadrature of the linear interpolant of (X0, E0).
-
-    Parameters
-    ----------
-    X0, E0 : ndarray, shape (m,)
-        Data points of the old contact (edges first and last) and their strain.
-    x : ndarray, shape (k,)
-        Points outside the old contact.
-    n : int
-        Quadrature points.
-
-    Returns
-    -------
-    ndarray, shape (k,)
-    """
-    x = np.asarray(x, dtype=float)
-    if x.size == 0:
-        return np.zeros(0)
-    c = 0.5 * (X0[0] + X0[-1])
-    r = 0.5 * (X0[-1] - X0[0])
-    s = sie.chebyshev_nodes(n)
-    Es = np.interp(c + r * s, X0, E0)
-    t = (x - c) / r
-    edge = np.where(t > 0.0, E0[-1], E0[0])
-    factor = np.sign(t) * np.sqrt(np.maximum(t * t - 1.0, 0.0))
-    integral = np.mean((Es[None, :] - edge[:, None]) / (t[:, None] - s[None, :]), axis=1)
-    return edge + factor * integral
