@@ -72,7 +72,7 @@ def test_validate_prints_the_resolved_scene(cli):
     assert "dovetail-root" in out
     assert "E = 1.15e+11 Pa, nu = 0.3, A = 4(1 - nu^2)/E = 3.16522e-11 1/Pa" in out
     assert "rounded_punch: flat_half_width = 0.002 m, radius = 0.01 m" in out
-    assert "method = auto, nodes = 512, skip_steady_cycles = true" in out
+    assert "method = auto, tol = 0.0001, nodes = 1000, skip_steady_cycles = true" in out
     assert "fields = [p, q, slip], every = 1, points = 201" in out
     assert "2 segments, 2050 steps, t = 0 .. 21 s" in out
     ramp_line, cycles_line = (line.split() for line in out.splitlines() if re.match(r"\s+[01]\s+(ramp|cycles)", line))

@@ -160,7 +160,7 @@ def test_output_points_1e8_is_refused_with_the_estimate(tmp_path):
 def test_solver_nodes_1e7_is_refused_with_the_estimate(tmp_path):
     path = write(tmp_path / "nodes.yaml", BASE + "solver: {method: general, nodes: 1e7}\n")
     assert_process_refused(halfslip("validate", path.name, cwd=tmp_path), "nodes.yaml", line=7,
-                           field="solver.nodes", message="25 TB")
+                           field="solver.nodes", message="1.2e+03 TB")
 
 
 def test_nodes_override_on_the_command_line_is_refused(tmp_path):

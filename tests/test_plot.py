@@ -24,7 +24,7 @@ SMALL = {
     "motor": [("count: 10", "count: 3")],
     "tabulated": [("steps: 20", "steps: 4"), ("steps: 5", "steps: 2"), ("points: 161", "points: 41")],
     "dovetail": [("count: 20", "count: 2"), ("steps_per_cycle: 100", "steps_per_cycle: 16"), ("steps: 50", "steps: 6"),
-                 ("nodes: 512", "nodes: 128")],
+                 ("tol: 1.0e-4", "nodes: 128")],
 }
 """Text replacements that shorten each example of examples/ (every one is listed: see the test below)."""
 

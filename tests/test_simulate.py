@@ -86,11 +86,15 @@ def test_cyclic_run_carries_the_permanent_stick_zone():
 
 
 def test_general_run_says_when_its_slip_zones_are_under_resolved():
-    """The widest slip zone, in lattice spacings, is recorded, and a narrow one is said in the messages.
+    """A slip zone narrower than a cell is said through the error estimate; a narrow one in the messages.
 
-    The rounded punch's slip zones stay within about 1 % of the contact width, so
-    64 nodes leave them far below RESOLVED_SPACINGS; the count scales with nodes
-    (lattice spacing = width / nodes) to the rounding of the stored edges.
+    The rounded punch's slip zones stay within about 1 % of the contact width
+    (a(P - Q/f) of J1: 0.5 % at the end of this ramp). At 64 nodes (1.6 % a cell)
+    no cell slips, but (S1) fails at both edges: every step of the Q ramp reports
+    an error estimate of at least one cell (1/64 of the width) although the two
+    lattices agree. At 512 nodes the zones span 2-5 cells, below
+    RESOLVED_SPACINGS: the widest is recorded and the messages say so; at 1024
+    it spans twice as many cells (the edges are placed to ~0.1 cell: 10 %).
     """
     from halfslip.simulator import RESOLVED_SPACINGS
 
@@ -105,11 +109,14 @@ loads:
 solver: {method: general, nodes: 64}
 output: {fields: []}
 """
-    coarse = hs.simulate(hs.parse_scene(text))
-    fine = hs.simulate(hs.parse_scene(text), nodes=128)
+    blind = hs.simulate(hs.parse_scene(text))
+    assert np.all(blind.regime.values[1:] == 1)  # Regime.STICK
+    ramp = blind.step.values > 4
+    assert np.all(blind.error_estimate.values[ramp] >= 1.0 / 64)
+    assert np.all(blind.error_estimate.values[~ramp] == 0.0)
+    coarse = hs.simulate(hs.parse_scene(text), nodes=512)
+    fine = hs.simulate(hs.parse_scene(text), nodes=1024)
     spacings = coarse.attrs["widest_slip_zone_spacings"]
     assert 0.0 < spacings < RESOLVED_SPACINGS
     assert "lattice spacings" in coarse.attrs["messages"]
-    # the same zone against a lattice twice as fine (1 %: the stick edges found at 64 and 128
-    # nodes differ by less than that fraction of the zone)
-    assert fine.attrs["widest_slip_zone_spacings"] == pytest.approx(2 * spacings, rel=1e-2)
+    assert fine.attrs["widest_slip_zone_spacings"] == pytest.approx(2 * spacings, rel=0.1)

@@ -145,26 +145,28 @@ loads:
       Q: {{amplitude: 6.0e4, phase: 0.0}}
       M: {{amplitude: 20.0, phase: 0.0}}
       sigma: {{amplitude: 1.0e7, phase: 0.0}}
-solver: {{method: general, nodes: 128, skip_steady_cycles: {skip}}}
+solver: {{method: general, nodes: {nodes}, skip_steady_cycles: {skip}}}
 output: {{fields: [], every: 1}}
 """
 
 
-def punch_scene(count=20, skip=True):
+def punch_scene(count=20, skip=True, nodes=128):
     """Rounded punch, P, Q, M and sigma in phase, moderate tension: (SS1) applies."""
-    return hs.parse_scene(PUNCH_SCENE.format(count=count, skip=str(skip).lower()))
+    return hs.parse_scene(PUNCH_SCENE.format(count=count, skip=str(skip).lower(), nodes=nodes))
 
 
 def test_rounded_punch_with_moment_and_tension_ss1_equals_marching():
     """(SS1) with M and sigma against 20 marched cycles of the general solver.
 
-    Tolerance 1e-4 of the contact width: the general solver's stated stick-edge
-    accuracy. Measured: right edge 2e-7, left edge 8.7e-5 at 64, 128 and 256
-    nodes and 20-80 steps per cycle alike -- the left stick edge at the lower end
-    point sits in a band of points locked at the slip limit, where the solver
-    cannot place it more closely (docs/general_solver.md).
+    Tolerance 2e-4 of the contact width at 1024 nodes: the general solver places a
+    stick edge to about 0.1 of a cell (sub-cell interpolation of the Coulomb
+    margin). Measured (left, right) edge differences: 2.4e-3, 9.3e-4 at 128
+    nodes; 1.4e-4, 9.3e-5 at 512; 3.1e-6, 8.9e-5 at 1024 (the same with 20, 80
+    and 320 steps per cycle: in-phase loading, the state depends on the end
+    points only); 1.3e-4, 5.6e-5 at 2048; 1.0e-4, 2.7e-5 at 4096 -- not
+    monotone below 1e-4: the edge's position within its cell.
     """
-    scene = punch_scene()
+    scene = punch_scene(nodes=1024)
     steady = hs.steady_state(scene, per_cycle=False)
     assert steady.attrs["method"] == "SS1"
     assert "not moderate" not in steady.attrs.get("note", "")
@@ -173,8 +175,8 @@ def test_rounded_punch_with_moment_and_tension_ss1_equals_marching():
     last = ds.isel(t=slice(-20, None))
     width = float(last.contact_right.min() - last.contact_left.max())
     left, right = marched_permanent_stick(ds, 20)
-    assert abs(left - float(steady.permanent_stick_left)) < 1e-4 * width
-    assert abs(right - float(steady.permanent_stick_right)) < 1e-4 * width
+    assert abs(left - float(steady.permanent_stick_left)) < 2e-4 * width
+    assert abs(right - float(steady.permanent_stick_right)) < 2e-4 * width
     # and the permanent stick zone is a real partial-slip answer, not the whole contact
     assert float(last.contact_right.min()) - right > 2e-3 * width
 
@@ -182,13 +184,13 @@ def test_rounded_punch_with_moment_and_tension_ss1_equals_marching():
 def test_general_solver_skips_steady_cycles_like_full_marching():
     """Skipping by the general solver's same_state changes the results by less than its tolerance.
 
-    The states one cycle apart agree to SAME_STATE_TOL (1e-4 of the width, of max abs(E));
-    the skipped run's last stored cycle must then agree with the fully marched one to
-    that tolerance, and its dissipation per cycle to 1 % (the cycle-to-cycle scatter
-    of the marched dissipation at 128 nodes is 0.3 %).
+    The states one cycle apart agree to SAME_STATE_TOL (1e-8 of f max p in q and of
+    A f max p W in the locked displacements, on the same cells): the active-set
+    pattern repeats, so the skipped run's last stored cycle agrees with the fully
+    marched one to rounding in the stick edges (asserted to 1e-9 of the width) and
+    in its dissipation per cycle (1e-9).
     """
     from halfslip import post
-    from halfslip.solvers.general import SAME_STATE_TOL
 
     skipped = hs.simulate(punch_scene(count=10, skip=True))
     full = hs.simulate(punch_scene(count=10, skip=False))
@@ -197,11 +199,11 @@ def test_general_solver_skips_steady_cycles_like_full_marching():
     last = full.isel(t=slice(-20, None))
     width = float(last.contact_right.min() - last.contact_left.max())
     for a, b in zip(marched_permanent_stick(skipped, 20), marched_permanent_stick(full, 20)):
-        assert abs(a - b) < SAME_STATE_TOL * width
+        assert abs(a - b) < 1e-9 * width
     d_skip = post.dissipation_per_cycle(skipped).dissipation.values
     d_full = post.dissipation_per_cycle(full).dissipation.values
-    assert d_skip[-1] == pytest.approx(d_full[-1], rel=1e-2)
-    assert float(skipped.final_dissipation) == pytest.approx(float(full.dissipation[-1]), rel=1e-2)
+    assert d_skip[-1] == pytest.approx(d_full[-1], rel=1e-9)
+    assert float(skipped.final_dissipation) == pytest.approx(float(full.dissipation[-1]), rel=1e-9)
 
 
 def test_general_state_difference_tells_a_first_cycle_from_a_steady_one():
@@ -209,7 +211,7 @@ def test_general_state_difference_tells_a_first_cycle_from_a_steady_one():
     from halfslip.solvers.general import GeneralSolver
     from halfslip.state import Loads
 
-    scene = punch_scene(count=3, skip=False)  # 128 nodes: consecutive cycles differ by 85, 0.5, 0.04 x tol
+    scene = punch_scene(count=3, skip=False)
     h = scene.history
     solver = GeneralSolver(hs.NormalProblem(scene.profile, scene.material.compliance), scene.friction, 128)
     state = solver.initial_state()

@@ -184,7 +184,7 @@ def describe_scene(scene: Scene) -> list[str]:
         f"material   E = {material.E:.6g} Pa, nu = {material.nu:g}, A = 4(1 - nu^2)/E = {material.compliance:.6g} 1/Pa",
         f"friction   f = {scene.friction:g}",
         f"geometry   {describe_profile(scene.profile)}",
-        f"solver     method = {solver.method}, nodes = {solver.nodes}, "
+        f"solver     method = {solver.method}, tol = {solver.tol:g}, nodes = {solver.nodes}, "
         f"skip_steady_cycles = {str(solver.skip_steady_cycles).lower()}"
         + ("" if solver.edge_travel is None else f", edge_travel = {solver.edge_travel:g}"),
         f"output     fields = [{', '.join(output.fields)}], every = {output.every}, points = {output.points}",

@@ -66,15 +66,15 @@ MAX_RUN_BYTES = 4 * GIB
 history, the stored steps with their fields, and the general solver's
 working set (GENERAL_BYTES_PER_NODE and GENERAL_BYTES_PER_NODE_PAIR). The
 examples need under 50 MB; 10 million stored steps of 201-point fields would
-need 48 GB, and 131,072 nodes about 4.8 GB (3.8 GB measured)."""
+need 48 GB, and 16,384 general-solver nodes about 3.3 GB."""
 
 GENERAL_BYTES_PER_NODE = 4096
-GENERAL_BYTES_PER_NODE_PAIR = 0.25
+GENERAL_BYTES_PER_NODE_PAIR = 12
 """Working memory of the general solver: GENERAL_BYTES_PER_NODE n +
-GENERAL_BYTES_PER_NODE_PAIR n^2 bytes for n nodes, fitted to the peak memory
-of a short motor-like run beyond the interpreter's 126 MB: 64 MB at 8,192
-nodes, 274 MB at 32,768, 3.66 GB at 131,072 (the square term is the strain
-of points arriving in the contact, taken against 2 n lattice points)."""
+GENERAL_BYTES_PER_NODE_PAIR n^2 bytes for n nodes. The square term is the
+Levinson table of the Toeplitz log kernel (halfslip.solvers._toeplitz: size^2/2
+doubles for size = 1.5 n cells, and the same for the half-resolution shadow
+lattice of the error estimate: 9 n^2 + 2.25 n^2 bytes)."""
 
 MAX_SWEEP_CASES = 1_000_000
 """Most cases of a sweep (grid product or explicit list). The result holds

@@ -292,6 +292,11 @@ class GeneralSolver(TangentialSolver):
             coarse = rough.memory
             W = N1.right - N1.left
             error = max(_apart(a, b) for a, b in zip(fine.stick, rough.stick)) / W
+        if mem.normal is not None and fine.regime != Regime.GROSS_SLIDING:
+            # a slip zone narrower than a cell: (S1) fails at an advancing edge whose end cell stuck
+            unresolved = _unresolved_edges(N1, loads0, loads1, self.f, fine.memory.status)
+            if unresolved:
+                error = max(error if math.isfinite(error) else 0.0, h / (N1.right - N1.left))
         memory = dataclasses.replace(fine.memory, error=error, coarse=coarse)
         new = ContactState(float(t1), loads1, N1.left, N1.right, fine.stick[0], fine.stick[1], fine.shift,
                            state.dissipation + fine.dissipation, memory)
@@ -305,9 +310,16 @@ class GeneralSolver(TangentialSolver):
 
     # -- one lattice ----------------------------------------------------------
     def _lattice(self, h: float, n: int) -> ToeplitzLattice:
+        """The Toeplitz data of the lattice of spacing ``h`` for at least ``n`` cells.
+
+        Sized for the reference width (``width`` / h cells) with half as much
+        again for contacts wider than it, grown by half when a contact needs
+        more: its Levinson table takes 4 size^2 bytes (limits.GENERAL_BYTES_PER_NODE_PAIR).
+        """
         lat = self._lattices.get(h)
         if lat is None or lat.size < n:
-            size = max(n, 2 * self.nodes if lat is None else 2 * lat.size)
+            expected = n if self.width is None else math.ceil(self.width / h)
+            size = max(n, 64, (3 * expected) // 2 if lat is None else (3 * lat.size) // 2)
             lat = self._lattices[h] = ToeplitzLattice(h, size, self.A)
         return lat
 
@@ -723,6 +735,31 @@ def _stick_edges(x, q, qmax, status, N: NormalSolution, h: float) -> tuple[float
         frac = min(max(frac, 0.0), 1.0)
         out.append(x[end] - step * frac * h)
     return out[0], out[1]
+
+
+def _unresolved_edges(N1: NormalSolution, loads0: Loads, loads1: Loads, f: float,
+                      status: np.ndarray) -> int:
+    """Contact edges whose end cell stuck although (S1) says the edge slips.
+
+    physics.md (S1): an edge of the contact (half-width d) sticks through a
+    small step only if abs(u) < f v, u = dQ -+ (pi/4) d dsigma, v = dP -+ 2 dM0 / d
+    (v > 0: the edge advances). A stationary or receding edge (v <= 0) with a
+    shear drive (u != 0) slips. When that fails and the end cell still sticks,
+    the slip zone there is narrower than a cell: the lattice cannot see it,
+    and the step says so through its error estimate (one cell).
+    """
+    d, x0 = N1.half_width, N1.center
+    dP, dQ = loads1.P - loads0.P, loads1.Q - loads0.Q
+    dM0 = (loads1.M - loads0.M) - dP * x0
+    dS = loads1.sigma - loads0.sigma
+    count = 0
+    drive = 1e-12 * f * max(abs(loads0.P), abs(loads1.P))
+    for side, cell in ((-1, status[0]), (1, status[-1])):
+        u = dQ + side * 0.25 * math.pi * d * dS
+        v = dP + side * 2.0 * dM0 / d
+        if cell == 0 and (abs(u) >= f * v if v > 0.0 else abs(u) > drive):
+            count += 1
+    return count
 
 
 def _apart(u: float, v: float) -> float:
