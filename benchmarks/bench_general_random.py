@@ -57,7 +57,7 @@ def run_solver(geometry, seed, nodes, repeat=1, estimate=True):
             solver._lattice(2 * width / nodes, nodes // 2 + 8)
         state = solver.initial_state(t[0])
         rec = {k: [] for k in ("contact_left", "contact_right", "stick_left", "stick_right", "intervals",
-                               "dissipation", "converged", "error", "iterations")}
+                               "dissipation", "converged", "error", "iterations", "main_left", "main_right")}
         started = time.perf_counter()
         for i in range(1, t.size):
             state, rep = solver.step(state, t[i], Loads(P[i], Q[i], M[i], S[i]))
@@ -70,6 +70,10 @@ def run_solver(geometry, seed, nodes, repeat=1, estimate=True):
             rec["converged"].append(rep.converged)
             rec["error"].append(rep.error_estimate)
             rec["iterations"].append(rep.iterations)
+            zones = solver.stick_zones(state)
+            widest = max(zones, key=lambda z: z[1] - z[0]) if zones else (math.nan, math.nan)
+            rec["main_left"].append(widest[0])
+            rec["main_right"].append(widest[1])
         best = min(best, time.perf_counter() - started)
     out = {k: np.asarray(v) for k, v in rec.items()}
     out["wall"] = best
@@ -87,10 +91,25 @@ def run_baseline(geometry, seed, n):
     out = run_history(info["problem"], info["friction"], n, P, Q, M, S, extent=extent)
     wall = time.perf_counter() - started
     rec = {k: np.asarray(out[k]) for k in ("contact_left", "contact_right", "stick_left", "stick_right",
-                                           "intervals", "dissipation", "converged")}
+                                           "intervals", "dissipation", "converged", "main_left", "main_right")}
     rec["wall"] = wall
     rec["steps"] = t.size - 1
     return rec
+
+
+RUNS = HERE / "reference" / "runs"
+
+
+def main_errors(run, geometry, seed):
+    """Edges of the widest stick interval against the reference's finest run (N = 8000), / width."""
+    fine = np.load(RUNS / f"{geometry}_{seed}_8000.npz")
+    W = fine["contact_right"] - fine["contact_left"]
+    out = []
+    for side in ("main_left", "main_right"):
+        a, b = np.asarray(run[side], float), fine[side]
+        ok = np.isfinite(a) & np.isfinite(b)
+        out.append(np.abs(a[ok] - b[ok]) / W[ok])
+    return np.concatenate(out)
 
 
 def compare(run, ref, key):
@@ -139,51 +158,41 @@ def main(argv=None):
     args = ap.parse_args(argv)
     ref = np.load(REFERENCE)
     rows = []
-    for nodes in args.nodes:
+    jobs = [("halfslip general", n) for n in args.nodes] + [("IC baseline", n) for n in args.baseline]
+    for name, n in jobs:
         for g in args.geometries:
-            pooled, mism, diss, inter, failed, wall, steps, est = [], 0, [], 0, 0, 0.0, 0, []
+            pooled, main, mism, diss, inter, failed, wall, steps, est = [], [], 0, [], 0, 0, 0.0, 0, []
             for seed in range(args.seeds):
-                run = run_solver(g, seed, nodes, args.repeat)
+                run = run_solver(g, seed, n, args.repeat) if name != "IC baseline" else run_baseline(g, seed, n)
                 e, m, d, i, f = compare(run, ref, f"{g}_{seed}_")
                 pooled.append(e)
+                main.append(main_errors(run, g, seed))
                 mism, inter, failed = mism + m, inter + i, failed + f
                 diss.append(d)
                 wall += run["wall"]
                 steps += run["steps"]
-                est.append(run["error"][np.isfinite(run["error"])])
-            e = np.concatenate(pooled)
-            est = np.concatenate(est)
-            rows.append(("halfslip general", nodes, g, np.median(e), np.percentile(e, 95), e.max(), max(diss),
-                         mism, inter, failed, 1e3 * wall / steps, np.percentile(est, 95)))
-            print(_fmt(rows[-1]), flush=True)
-    for n in args.baseline:
-        for g in args.geometries:
-            pooled, mism, diss, inter, failed, wall, steps = [], 0, [], 0, 0, 0.0, 0
-            for seed in range(args.seeds):
-                run = run_baseline(g, seed, n)
-                e, m, d, i, f = compare(run, ref, f"{g}_{seed}_")
-                pooled.append(e)
-                mism, inter, failed = mism + m, inter + i, failed + f
-                diss.append(d)
-                wall += run["wall"]
-                steps += run["steps"]
-            e = np.concatenate(pooled)
-            rows.append(("IC baseline", n, g, np.median(e), np.percentile(e, 95), e.max(), max(diss), mism, inter,
-                         failed, 1e3 * wall / steps, math.nan))
+                if "error" in run:
+                    est.append(run["error"][np.isfinite(run["error"])])
+            e, mn = np.concatenate(pooled), np.concatenate(main)
+            estimate = np.percentile(np.concatenate(est), 95) if est else math.nan
+            rows.append((name, n, g, np.median(e), np.percentile(e, 95), e.max(), np.percentile(mn, 95), mn.max(),
+                         max(diss), mism, inter, failed, 1e3 * wall / steps, estimate))
             print(_fmt(rows[-1]), flush=True)
     if not args.no_doc:
         write_doc(rows, args, " ".join(sys.argv[1:]))
 
 
 def _fmt(r):
-    return (f"| {r[0]} | {r[1]} | {r[2]} | {r[3]:.1e} | {r[4]:.1e} | {r[5]:.1e} | {100 * r[6]:.2f} % | {r[7]} | "
-            f"{r[8]} | {r[9]} | {r[10]:.2f} | {'' if math.isnan(r[11]) else f'{r[11]:.1e}'} |")
+    return (f"| {r[0]} | {r[1]} | {r[2]} | {r[3]:.1e} | {r[4]:.1e} | {r[5]:.1e} | {r[6]:.1e} | {r[7]:.1e} | "
+            f"{100 * r[8]:.2f} % | {r[9]} | {r[10]} | {r[11]} | {r[12]:.1f} | "
+            f"{'' if math.isnan(r[13]) else f'{r[13]:.1e}'} |")
 
 
 def write_doc(rows, args, argv):
-    head = ("| solver | nodes / N | geometry | edge error median | 95th pct | max | final dissipation error | "
-            "stick/no-stick mismatches | interval-count mismatches | failed steps | ms / step | "
-            "error estimate 95th pct |\n|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    head = ("| solver | nodes / N | geometry | outermost stick edges: median | 95th pct | max | "
+            "widest stick interval: 95th pct | max | final dissipation error | stick/no-stick mismatches | "
+            "interval-count mismatches | failed steps | ms / step | error estimate 95th pct |\n"
+            "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     text = (f"{BEGIN}\nMeasured with `python benchmarks/bench_general_random.py {argv}` on {time.strftime('%Y-%m-%d')}; "
             f"machine: {machine()}. Seeds 0..{args.seeds - 1} per geometry (112 steps each); errors against "
             f"benchmarks/reference/random_reference.npz (edges relative to the contact width; dissipation "

@@ -69,6 +69,8 @@ from .base import BACKWARD_SLIP, FORWARD_SLIP, OUT_OF_CONTACT, STICK, Tangential
 DEFAULT_NODES = 1024
 #: Largest contact-edge travel per slipping sub-step, relative to the contact width.
 DEFAULT_TRAVEL = 0.01
+#: Largest travel of a stick edge per slipping sub-step, relative to the contact width.
+DEFAULT_STICK_TRAVEL = 0.02
 #: Most sub-steps one step is divided into.
 MAX_SUBSTEPS = 64
 #: Active-set iterations before the projected-gradient restart.
@@ -177,6 +179,9 @@ class GeneralSolver(TangentialSolver):
     travel : float, optional
         Largest travel of a contact edge, as a fraction of the contact width,
         over a slipping (sub-)step (0: never subdivide). Default DEFAULT_TRAVEL.
+    stick_travel : float, optional
+        Largest travel of a stick edge over a slipping (sub-)step, as a
+        fraction of the contact width (0: never). Default DEFAULT_STICK_TRAVEL.
 
     Attributes
     ----------
@@ -189,7 +194,8 @@ class GeneralSolver(TangentialSolver):
     name = "general"
 
     def __init__(self, problem: NormalProblem, friction: float, nodes: int = DEFAULT_NODES, stations=None,
-                 width: float | None = None, estimate: bool = True, travel: float = None):
+                 width: float | None = None, estimate: bool = True, travel: float | None = None,
+                 stick_travel: float | None = None):
         self.problem = problem
         self.f = float(friction)
         if not self.f > 0.0:
@@ -205,6 +211,9 @@ class GeneralSolver(TangentialSolver):
         self.stations = None if stations is None else np.asarray(stations, dtype=float)
         self.estimate = bool(estimate)
         self.travel = DEFAULT_TRAVEL if travel is None else float(travel)
+        self.stick_travel = DEFAULT_STICK_TRAVEL if stick_travel is None else float(stick_travel)
+        if not (math.isfinite(self.stick_travel) and self.stick_travel >= 0.0):
+            raise ValueError(f"stick_travel must be >= 0, got {stick_travel!r}")
         if not (math.isfinite(self.travel) and self.travel >= 0.0):
             raise ValueError(f"travel must be >= 0, got {travel!r}")
         self._lattices: dict[float, ToeplitzLattice] = {}
@@ -222,10 +231,12 @@ class GeneralSolver(TangentialSolver):
         """Advance ``state`` to ``t1`` and ``loads1`` along the straight line in (P, Q, M, sigma).
 
         A step that slipped while a contact edge travelled further than
-        ``travel`` of the contact width is taken again in equal sub-steps along
-        the same line (at most MAX_SUBSTEPS): the dissipation of a slipping
-        step over which the contact changes is second order in the step
-        (measured against the exact method: docs/general_solver.md).
+        ``travel`` of the contact width, or a stick edge further than
+        ``stick_travel``, is taken again in equal sub-steps along the same line
+        (at most MAX_SUBSTEPS): the answer of a slipping step depends on the
+        path within it when the contact changes (the dissipation error is
+        second order in the step, measured against the exact method) or the
+        loading is not proportional (docs/general_solver.md).
         """
         self.counters["steps"] += 1
         loads1 = Loads(*(float(v) for v in loads1))
@@ -236,7 +247,13 @@ class GeneralSolver(TangentialSolver):
         N0, N1 = state.memory.normal, new.memory.normal
         W = N1.right - N1.left
         moved = max(abs(N1.left - N0.left), abs(N1.right - N0.right)) / W
-        pieces = min(MAX_SUBSTEPS, math.ceil(moved / self.travel)) if self.travel > 0.0 else 1
+        pieces = math.ceil(moved / self.travel) if self.travel > 0.0 else 1
+        if self.stick_travel > 0.0 and report.regime == Regime.PARTIAL_SLIP and np.isfinite(state.stick_left):
+            # a stick edge that travels far in one step: the answer depends on the path within the step
+            # (non-proportional loading: measured on the random histories, docs/general_solver.md)
+            travelled = max(abs(new.stick_left - state.stick_left), abs(new.stick_right - state.stick_right)) / W
+            pieces = max(pieces, math.ceil(travelled / self.stick_travel))
+        pieces = min(MAX_SUBSTEPS, pieces)
         if pieces <= 1:
             return new, report
         self.counters["substeps"] += pieces
@@ -494,6 +511,17 @@ class GeneralSolver(TangentialSolver):
             return 0
         return len(_runs(mem.status == 0))
 
+    def stick_zones(self, state: ContactState) -> list[tuple[float, float]]:
+        """The stick intervals of the state, left to right, as (left, right) [m] within their cells."""
+        mem = state.memory
+        if mem.normal is None:
+            return []
+        runs = _runs(mem.status == 0)
+        if len(runs) == 1 and runs[0] == (0, mem.q.size):
+            return [(mem.normal.left, mem.normal.right)]
+        qmax = self.f * mem.capacity
+        return [_run_edges(mem.x, mem.q, qmax, mem.status, mem.normal, mem.spacing, a, b - 1) for a, b in runs]
+
     def station_states(self, state: ContactState, x: np.ndarray, q: np.ndarray) -> np.ndarray:
         """Out of contact / stick / forward / backward slip at surface points, from the cells."""
         mem = state.memory
@@ -716,7 +744,11 @@ def _stick_edges(x, q, qmax, status, N: NormalSolution, h: float) -> tuple[float
     stick cell's centre and its slipping neighbour's); a stick run reaching the end cell ends at the
     contact edge."""
     idx = np.flatnonzero(status == 0)
-    i, k = int(idx[0]), int(idx[-1])
+    return _run_edges(x, q, qmax, status, N, h, int(idx[0]), int(idx[-1]))
+
+
+def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int) -> tuple[float, float]:
+    """Edges of the stick run of cells i..k, within their cells (see :func:`_stick_edges`)."""
     out = []
     for end, step, edge in ((i, 1, N.left), (k, -1, N.right)):
         nb = end - step
