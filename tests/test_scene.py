@@ -93,7 +93,9 @@ def test_defaults_and_unquoted_exponents():
     scene = parse_scene(MINIMAL)
     assert scene.name == "scene" and scene.path is None and scene.text == MINIMAL
     assert scene.material == hs.Material(E=2.0e11, nu=0.3)  # "200e9" is a number, not text
-    assert scene.solver == SolverOptions() == SolverOptions("auto", 512, True)
+    # nodes from the default tol 1e-4: ceil(0.1 / 1e-4) (halfslip.scene.NODES_PER_TOL)
+    assert scene.solver == SolverOptions() == SolverOptions("auto", 1000, True) == SolverOptions(tol=1e-4)
+    assert SolverOptions(tol=1e-3).nodes == 100 and SolverOptions(tol=1e-3, nodes=64).nodes == 64
     assert scene.output == OutputOptions() == OutputOptions(("p", "q", "slip"), 1, 201)
     assert [segment.line for segment in scene.history.segments] == [5]
 
