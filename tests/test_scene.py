@@ -160,6 +160,9 @@ def test_errors_from_parse_scene_name_the_line_and_field():
     [
         (lambda: SolverOptions(method="fastest"), "solver.method"),
         (lambda: SolverOptions(nodes=7), "solver.nodes"),
+        (lambda: SolverOptions(tol=0.5), "solver.tol"),
+        (lambda: SolverOptions(tol=-1e-4), "solver.tol"),
+        (lambda: SolverOptions(tol="fine"), "solver.tol"),
         (lambda: SolverOptions(skip_steady_cycles="yes"), "solver.skip_steady_cycles"),
         (lambda: OutputOptions(fields=("p", "sigma_xx")), "output.fields[1]"),
         (lambda: OutputOptions(fields="p"), "output.fields"),
@@ -168,6 +171,8 @@ def test_errors_from_parse_scene_name_the_line_and_field():
     ],
 )
 def test_options_check_themselves(make, field):
+    """Each option refuses a bad value with an error naming its field (solver.tol: a positive fraction
+    of the contact width below 0.1)."""
     with pytest.raises(HalfslipInputError) as error:
         make()
     assert error.value.field == field
