@@ -1,6 +1,6 @@
 """Run the examples and write the numbers docs/user_guide.md quotes to docs/guide_numbers.json.
 
-    python docs/make_guide_numbers.py            # all examples (the dovetail marches ~1 min)
+    python docs/make_guide_numbers.py            # all examples (the dovetail marches in a few seconds)
     python docs/make_guide_numbers.py hertz_pad  # some of them
 
 Each example gives the lines ``halfslip run`` prints (``summary``, without

@@ -59,7 +59,7 @@ def test_a_shortened_dovetail_run_has_the_structure_the_guide_describes():
     assert regimes <= {1, 2} and 2 in regimes
     left, right = float(ds.permanent_stick_left), float(ds.permanent_stick_right)
     assert ds.contact_left.values[-1] < left < right < ds.contact_right.values[-1]
-    stored = STORED["dovetail"]["values"]  # of the full run: 20 cycles of 100 steps at 512 nodes
+    stored = STORED["dovetail"]["values"]  # of the full run: 20 cycles of 100 steps at 1000 nodes (solver.tol 1e-4)
     assert left == pytest.approx(stored["permanent_stick_left"], rel=0.01)
     assert right == pytest.approx(stored["permanent_stick_right"], rel=0.01)
     assert "message_kind" in ds and ds["message_kind"].dims == ("message",)

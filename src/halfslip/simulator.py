@@ -132,10 +132,11 @@ def reference_width(scene, problem: NormalProblem) -> float | None:
     return float(max(widths))
 
 
-#: A slip zone narrower than this many lattice spacings (contact width / nodes) leaves slip and
-#: dissipation under-resolved: on the dovetail example (widest zone 1.2 % of the contact) the
-#: dissipation per cycle is 4.7 % low at 512 nodes (6 spacings), 2.0 % at 1024, 0.9 % at 2048
-#: (against 1.83e-4 J/m extrapolated from the three, docs/general_solver.md).
+#: A slip zone narrower than this many cells (contact width / nodes) leaves slip and dissipation
+#: under-resolved: on the dovetail example (widest zone 1.2 % of the contact) the dissipation per
+#: cycle is 2.2 % off at 500 nodes (5.8 cells), 0.24 % at 1000 (11.9 cells), 0.07 % at 2000,
+#: against 4000 nodes (docs/general_solver.md); the slip amplitude read at stations is worse
+#: (17 % high at its peak at 1000 nodes, docs/user_guide.md).
 RESOLVED_SPACINGS = 16.0
 
 
