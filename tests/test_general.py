@@ -1,14 +1,25 @@
-"""The general slip solver against closed forms, the exact method, and its own invariants.
+"""The general lattice solver against closed forms, the exact method, and its own invariants.
 
-Where the locked-in strain E is piecewise linear between material points (no
-slip history: Cattaneo-Mindlin, Jaeger-Ciavarella, moderate bulk tension,
-proportional loading on Hertz), the solver is exact up to rounding: its
-consistency and equilibrium integrals are evaluated in closed form for such
-data, so those tests use 1e-9 relative. Once a slip zone has stopped, E has a
-square-root onset at the old stick edge, interpolated with a fitted
-coefficient (``_general_points``); the remaining error is that of the lattice,
-O(h^1.5..2), and those tests state the tolerance measured at their resolution
-with a margin of about 3x.
+The solver (``halfslip.solvers.general``) carries a constant shear per cell of
+width h = W / nodes and solves each step as a strictly convex problem, checked
+to rounding (``StepReport.residual``). What remains is the error of the
+lattice, and where a contact edge moves during a slipping step, of the step.
+Every tolerance below comes from a measurement at two to six resolutions, with
+the observed order and the measured value at the tested resolution in the
+test's docstring, and a margin of 2-5x over the largest measured value.
+
+Error measures used throughout (W: contact width):
+
+- stick edges: distance to the closed form, / W. First order in h: about
+  0.1-0.25 of a cell, the exact fraction depending on where the edge falls in
+  its cell (so the error is not monotone from one resolution to the next).
+- q, ``rms``: root mean square of q - q_closed over the contact (4001 points),
+  / max abs(q_closed); first order in h.
+- q, ``away``: largest abs(q - q_closed) more than 0.05 W from every stick edge
+  (and old stick edge), / max abs(q_closed); first order in h. Within a cell of
+  a stick edge q = (q_j / cap_j) p is off by O(1) of the local shear (the true
+  ratio q / p varies like a square root there), so no pointwise bound is
+  asserted next to the edges.
 """
 from __future__ import annotations
 
@@ -19,26 +30,38 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+import halfslip.solvers.general as general_module
 from halfslip.geometry import NormalProblem
+from halfslip.solvers.base import BACKWARD_SLIP, FORWARD_SLIP, OUT_OF_CONTACT, STICK
 from halfslip.solvers.exact import ExactMemory
 from halfslip.solvers.general import GeneralSolver
-from halfslip.state import Loads, Regime
+from halfslip.state import Regime
 
 import helpers
 from helpers import A, F, P0, PROFILES
 from helpers import R_HERTZ as R
 
-
-
 march = helpers.march
 
 
-def l2(a, b):
-    return float(np.sqrt(np.mean((np.asarray(a) - b) ** 2) / np.mean(np.asarray(b) ** 2)))
-
-
-def make(kind, nodes=256, **kw):
+def make(kind, nodes=1024, **kw):
     return helpers.make(kind, "general", nodes=nodes, **kw)
+
+
+def q_errors(q, q_closed, x, edges, width):
+    """(rms, away) of the module notes; ``edges`` are the stick edges (and old stick edges) as abs(x)."""
+    scale = float(np.max(np.abs(q_closed)))
+    rms = float(np.sqrt(np.mean((q - q_closed) ** 2))) / scale
+    away = np.ones(x.shape, bool)
+    for e in edges:
+        away &= np.abs(np.abs(x) - e) > 0.05 * width
+    return rms, float(np.max(np.abs(q - q_closed)[away])) / scale
+
+
+def j2_closed(problem, x, Q_max, Q):
+    """(J2) after loading to Q_max at constant P0 and unloading to Q."""
+    return (-F * problem.pressure(x, P0) + 2 * F * problem.pressure(x, P0 - (Q_max - Q) / (2 * F))
+            - F * problem.pressure(x, P0 - Q_max / F))
 
 
 # ---------------------------------------------------------------------------
@@ -49,52 +72,71 @@ def make(kind, nodes=256, **kw):
 @pytest.mark.parametrize("kind", PROFILES)
 @pytest.mark.parametrize("ratio", [0.05, 0.5, 0.95])
 def test_cattaneo_mindlin_and_jaeger_ciavarella(kind, ratio):
-    """J1: b = a(P - Q/f) (Hertz: a sqrt(1 - Q/fP)), q = f [p(x, P) - p(x, P - Q/f)].
+    """J1 at 1024 nodes: b = a(P - Q/f) (Hertz: a sqrt(1 - Q/fP)), q = f [p(x, P) - p(x, P - Q/f)].
 
-    E = 0 after the normal load: exact up to rounding (1e-9).
+    Edges, first order (max over 17 ratios 0.1 .. 0.9: 1.8e-3 / 4.7e-4 /
+    2.5e-4 / 1.3e-4 / 6.3e-5 of W at 128 .. 2048 nodes, Hertz; punch 6.2e-4
+    / 3.1e-4 / 1.8e-4 / 8.2e-5 at 256 .. 2048): measured at most 1.1e-4 on
+    these six cases and 1.8e-4 over the scan; tolerance 4e-4.
+    q, first order (rms 2.0e-2 / 1.2e-2 / 6.9e-3 / 3.1e-3 at 256 .. 2048,
+    punch, Q = 0.05 f P, the worst case): rms at most 6.9e-3 (tolerance
+    1.5e-2), away at most 2.7e-3 (tolerance 6e-3).
     """
     problem, solver = make(kind)
     Q = ratio * F * P0
     state, report = march(solver, [(P0, 0.0), (P0, Q)])[-1]
-    assert report.regime == Regime.PARTIAL_SLIP and report.slipped
+    assert report.regime == Regime.PARTIAL_SLIP and report.slipped and report.converged
     a = float(problem.half_width(P0))
     b = float(problem.half_width(P0 - Q / F))
-    assert state.stick_right == pytest.approx(b, rel=1e-9)
-    assert state.stick_left == pytest.approx(-b, rel=1e-9)
-    x = np.linspace(-a, a, 801)
+    W = 2 * a
+    assert abs(state.stick_right - b) / W < 4e-4
+    assert abs(state.stick_left + b) / W < 4e-4
+    x = np.linspace(-a, a, 4001)
     _, q = solver.tractions(state.memory, x)
     q_closed = F * (problem.pressure(x, P0) - problem.pressure(x, P0 - Q / F))
-    assert np.max(np.abs(q - q_closed)) <= 1e-9 * np.max(q_closed)
+    rms, away = q_errors(q, q_closed, x, [b], W)
+    assert rms < 1.5e-2 and away < 6e-3, (rms, away)
 
 
 @pytest.mark.parametrize("kind", PROFILES)
 def test_mindlin_unloading(kind):
-    """J2 after loading to Q_max: reversed slip zones reach c = a(P - (Q_max - Q)/(2f)).
+    """J2 at 1024 nodes after loading to Q_max = 0.6 f P: reversed slip zones reach
+    c = a(P - (Q_max - Q)/(2f)), q of (J2).
 
-    The frozen square-root strain at the first stick edge limits the accuracy:
-    measured 5e-6 (edges, / contact width) and 2e-4 (q, L2) at 256 nodes.
+    Edges, first order (at most 6.2e-4 / 2.4e-4 / 1.3e-4 / 8.9e-5 of W at
+    256 / 512 / 1024 / 2048 nodes over both profiles and the three Q):
+    measured at most 1.3e-4, tolerance 4e-4. q (edges: c and the old stick
+    edge b, where the locked displacement has a square-root onset), first
+    order: rms 1.9e-2 / 1.1e-2 / 6.6e-3 / 3.5e-3 (tolerance 1.5e-2), away
+    1.7e-2 / 8.0e-3 / 3.9e-3 / 1.8e-3 (tolerance 1e-2), worst of both
+    profiles and the three Q.
     """
     problem, solver = make(kind)
     Q_max = 0.6 * F * P0
     loaded = march(solver, [(P0, 0.0), (P0, Q_max)])[-1][0]
     a = float(problem.half_width(P0))
-    x = np.linspace(-a, a, 801)
+    W = 2 * a
+    b = float(problem.half_width(P0 - Q_max / F))
+    x = np.linspace(-a, a, 4001)
     for Q in (0.4 * Q_max, 0.0, -0.5 * Q_max):
         state, report = march(solver, [(P0, Q)], loaded)[-1]
         c = float(problem.half_width(P0 - (Q_max - Q) / (2 * F)))
-        assert report.regime == Regime.PARTIAL_SLIP
-        assert abs(state.stick_right - c) / (2 * a) < 2e-5
-        assert abs(state.stick_left + c) / (2 * a) < 2e-5
+        assert report.regime == Regime.PARTIAL_SLIP and report.converged
+        assert abs(state.stick_right - c) / W < 4e-4
+        assert abs(state.stick_left + c) / W < 4e-4
         _, q = solver.tractions(state.memory, x)
-        q_closed = (-F * problem.pressure(x, P0) + 2 * F * problem.pressure(x, P0 - (Q_max - Q) / (2 * F))
-                    - F * problem.pressure(x, P0 - Q_max / F))
-        assert l2(q, q_closed) < 6e-4
+        rms, away = q_errors(q, j2_closed(problem, x, Q_max, Q), x, [c, b], W)
+        assert rms < 1.5e-2 and away < 1e-2, (Q, rms, away)
 
 
 @pytest.mark.parametrize("sigma_over_Q", [0.0, 500.0, 1000.0])
 def test_bulk_tension_moderate(sigma_over_Q):
-    """Q and sigma raised together at constant P on Hertz: stick zone centred at
-    e = -A R sigma/(4f), half-width a sqrt(1 - Q/(fP)) (E = 0: exact, 1e-9)."""
+    """Q and sigma raised together at constant P on Hertz (1024 nodes): stick zone centred at
+    e = -A R sigma/(4f) (Nowell-Hills), half-width a sqrt(1 - Q/(fP)).
+
+    Edges over the ten steps, first order: at most 7.7e-4 / 4.3e-4 / 1.7e-4 /
+    7.8e-5 of W at 256 / 512 / 1024 / 2048 nodes; tolerance 4e-4.
+    """
     problem, solver = make("hertz")
     a = float(problem.half_width(P0))
     path = [(P0, 0.0)] + [(P0, 0.5 * F * P0 * k / 10, 0.0, sigma_over_Q * 0.5 * F * P0 * k / 10)
@@ -103,62 +145,101 @@ def test_bulk_tension_moderate(sigma_over_Q):
         Q, sigma = state.loads.Q, state.loads.sigma
         e = -A * R * sigma / (4 * F)
         b = a * math.sqrt(1 - Q / (F * P0))
-        assert report.regime == Regime.PARTIAL_SLIP
-        assert state.stick_left == pytest.approx(e - b, abs=1e-9 * a)
-        assert state.stick_right == pytest.approx(e + b, abs=1e-9 * a)
+        assert report.regime == Regime.PARTIAL_SLIP and report.converged
+        assert abs(state.stick_left - (e - b)) / (2 * a) < 4e-4
+        assert abs(state.stick_right - (e + b)) / (2 * a) < 4e-4
 
 
 def test_bulk_tension_reverses_slip():
-    """A large sigma reverses the slip at the left end: q = -f p there, +f p at the right.
+    """A large sigma reverses the slip at the left end (1024 nodes): the cells there slip backward
+    with q = -f p, those at the right end forward with q = +f p, one stick run between.
 
-    The slip zones carry q = s f p by construction (1e-12); the stick zone
-    obeys Coulomb up to the discretisation (measured 1e-6 of f max p).
+    Slip cells carry q = +- f cap_j, so q = +- f p to rounding (measured
+    1.9e-16 of f max p; tolerance 1e-12); stick cells obey Coulomb to the
+    active set's own threshold (FLIP_TOL = 1e-10 of f max p; tolerance 1e-9;
+    the stick cells are at least 5.0e-2 f max p below it). The per-station ``state`` codes follow
+    the cells.
     """
     problem, solver = make("hertz")
     a = float(problem.half_width(P0))
     path = [(P0, 0.0)] + [(P0, 0.3 * F * P0 * k / 10, 0.0, 1e9 * k / 10) for k in range(1, 11)]
     state, report = march(solver, path)[-1]
-    assert report.regime == Regime.PARTIAL_SLIP
+    assert report.regime == Regime.PARTIAL_SLIP and report.converged
+    status = state.memory.status
+    assert status[0] == -1 and status[-1] == 1 and solver.stick_intervals(state) == 1
     x = np.linspace(-a, a, 4001)[1:-1]
     p, q = solver.tractions(state.memory, x)
-    left, right = x < state.stick_left, x > state.stick_right
-    stick = ~left & ~right
-    assert left.any() and right.any() and stick.any()
-    assert np.allclose(q[left], -F * p[left], rtol=1e-12, atol=1e-12 * F * p.max())
-    assert np.allclose(q[right], F * p[right], rtol=1e-12, atol=1e-12 * F * p.max())
-    assert np.all(np.abs(q[stick]) <= F * p[stick] + 1e-5 * F * p.max())
-    assert solver.shear_force(state.memory) == pytest.approx(state.loads.Q, rel=1e-10)
+    codes = solver.station_states(state, x, q)
+    back, forward, stick = codes == BACKWARD_SLIP, codes == FORWARD_SLIP, codes == STICK
+    assert back.any() and forward.any() and stick.any() and np.all(back | forward | stick)
+    assert x[back].max() < x[stick].min() and x[stick].max() < x[forward].min()  # backward | stick | forward
+    assert x[back].max() < state.stick_left + state.memory.spacing
+    assert x[forward].min() > state.stick_right - state.memory.spacing
+    scale = F * p.max()
+    assert np.max(np.abs(q[back] + F * p[back])) <= 1e-12 * scale
+    assert np.max(np.abs(q[forward] - F * p[forward])) <= 1e-12 * scale
+    assert np.all(np.abs(q[stick]) <= F * p[stick] + 1e-9 * scale)
+    assert solver.shear_force(state.memory) == pytest.approx(state.loads.Q, rel=1e-12)
 
 
 def test_steady_state_permanent_stick_zone():
-    """In-phase cyclic Q and sigma at constant P on Hertz settle on SS2:
-    d^2 = a(P0)^2 - A R dQ/(pi f), e = -A R dsigma/(8 f), whatever the mean.
+    """In-phase cyclic Q and sigma at constant P on Hertz (512 nodes, 40 steps per cycle) settle on
+    SS2: d^2 = a(P0)^2 - A R dQ/(pi f), e = -A R dsigma/(8 f), whatever the mean.
 
-    Measured 5e-6 of the contact width at 256 nodes after the first reversal.
+    At the trough the stick zone is the permanent one: edges within 6.25e-5
+    of W at 512, 1024 and 2048 nodes (0.03-0.13 cells), 3.0e-5 at 4096;
+    tolerance 2e-4. From trough to peak the shear changes by
+    dq = 2 f p - (2f/(A R)) sqrt(d^2 - (x - e)^2) (SS1 solved for Hertz), first
+    order: rms 4.5e-3 / 2.6e-3 / 1.3e-3 / 7.7e-4 / 4.3e-4 and away 8.0e-3 /
+    4.0e-3 / 2.0e-3 / 9.9e-4 / 4.9e-4 at 256 .. 4096 nodes; tolerances at
+    512: 6e-3 and 1e-2. The stick edges at the peak are not asserted: the
+    material between the permanent zone and the first loading's stick edge
+    returns to the slip limit there, so the discrete problem barely fixes
+    the edge (0.39 / 0.73 / 1.04 / 0.58 / 1.04 cells off at 256 .. 4096
+    nodes; at 8192 the whole band slips by 1e-11 m and the edge is 0.07 W
+    off) while q, checked by dq, is well determined. The cycle repeats:
+    states a cycle apart are the same to the solver's own tolerance
+    (same_state; measured bit-identical).
     """
-    problem, solver = make("hertz")
+    problem, solver = make("hertz", 512)
     a = float(problem.half_width(P0))
+    W = 2 * a
     Q_mean, dQ, s_mean, ds = 0.15 * F * P0, 0.7 * F * P0, 3e7, 1e8
     n = 40
     path = [(P0, 0.0)]
-    for k in range(1, 4 * n + 1):
+    for k in range(1, 3 * n + n // 4 + 1):
         ramp = min(1.0, k / 10)
         phase = math.sin(2 * math.pi * k / n)
         path.append((P0, Q_mean * ramp + 0.5 * dQ * phase, 0.0, s_mean * ramp + 0.5 * ds * phase))
     out = march(solver, path)
+    assert all(report.converged for _, report in out)
     d = math.sqrt(a * a - A * R * dQ / (math.pi * F))
     e = -A * R * ds / (8 * F)
-    for cycle in (2, 3):
-        for k in (n // 4, 3 * n // 4):
-            state, report = out[cycle * n + k]
-            assert report.regime == Regime.PARTIAL_SLIP
-            assert abs(state.stick_left - (e - d)) / (2 * a) < 2e-5
-            assert abs(state.stick_right - (e + d)) / (2 * a) < 2e-5
+    x = np.linspace(-a, a, 4001)
+    dq_closed = 2 * F * problem.pressure(x, P0) - (2 * F / (A * R)) * np.sqrt(np.clip(d * d - (x - e) ** 2, 0.0, None))
+    for cycle in (1, 2):
+        trough, _ = out[cycle * n + 3 * n // 4]
+        peak, report = out[(cycle + 1) * n + n // 4]
+        assert report.regime == Regime.PARTIAL_SLIP
+        assert abs(trough.stick_left - (e - d)) / W < 2e-4
+        assert abs(trough.stick_right - (e + d)) / W < 2e-4
+        dq = solver.tractions(peak.memory, x)[1] - solver.tractions(trough.memory, x)[1]
+        scale = np.max(np.abs(dq_closed))
+        rms = np.sqrt(np.mean((dq - dq_closed) ** 2)) / scale
+        away = (np.abs(x - (e - d)) > 0.05 * W) & (np.abs(x - (e + d)) > 0.05 * W)
+        assert rms < 6e-3 and np.max(np.abs(dq - dq_closed)[away]) / scale < 1e-2
+    assert solver.same_state(out[n + 3 * n // 4][0], out[2 * n + 3 * n // 4][0])
+    assert solver.same_state(out[2 * n + n // 4][0], out[3 * n + n // 4][0])
 
 
 # ---------------------------------------------------------------------------
 # the first trap, and the exact method
 # ---------------------------------------------------------------------------
+
+#: rms error of q against (Q/P) p after proportional loading, by resolution (module notes): worst measured
+#: over both profiles and 1 / 10 / 50 steps 2.3e-2 / 8.4e-3 / 3.2e-3 at 32 / 128 / 512 nodes (the punch in
+#: 50 steps; 1.8e-3 at 1024: order 0.7-0.85), tolerances 2.5x.
+PROPORTIONAL_RMS = {32: 6e-2, 128: 2e-2, 512: 8e-3}
 
 
 @pytest.mark.parametrize("kind", PROFILES)
@@ -167,21 +248,23 @@ def test_steady_state_permanent_stick_zone():
 def test_proportional_loading_sticks_fully(kind, nodes, steps):
     """physics.md, first trap: P and Q from zero with Q/P = 0.5 f stick fully, q = (Q/P) p.
 
-    Arrivals stick from the instant they arrive, so no point slips at any
-    resolution and q is right to the interpolation error of the locked strain:
-    measured 1e-8 (Hertz) and 2e-4 / 9e-6 / 7e-7 at 32 / 128 / 512 nodes for
-    the punch, whose strain kinks at the ends of its flat (tolerance 5e-4).
-    The shortcut of pinning arrivals to the previous step was 23% off.
+    Arrivals lock the displacement of the stuck increments at the instant
+    they arrive, so no cell slips in any step at any resolution (the shortcut
+    of pinning arrivals to the previous step was 23% off with up to 86 nodes
+    slipping), and q converges to (Q/P) p: rms error in PROPORTIONAL_RMS.
     """
     problem, solver = make(kind, nodes)
     path = [(P0 * k / steps, 0.5 * F * P0 * k / steps) for k in range(1, steps + 1)]
     out = march(solver, path)
-    assert all(report.regime == Regime.STICK and not report.slipped for _, report in out)
+    for state, report in out:
+        assert report.regime == Regime.STICK and not report.slipped and report.converged
+        assert not np.any(state.memory.status) and not np.any(state.memory.G)
     state = out[-1][0]
     a = state.contact_right
-    x = np.linspace(-a, a, 1601)
+    x = np.linspace(-a, a, 4001)
     p, q = solver.tractions(state.memory, x)
-    assert np.max(np.abs(q - 0.5 * F * p)) <= 5e-4 * 0.5 * F * p.max()
+    rms = np.sqrt(np.mean((q - 0.5 * F * p) ** 2)) / (0.5 * F * p.max())
+    assert rms < PROPORTIONAL_RMS[nodes], rms
 
 
 def motor_path(spc=64, cycles=2, P1=3e4, Q1=3e4):
@@ -194,60 +277,97 @@ def motor_path(spc=64, cycles=2, P1=3e4, Q1=3e4):
 
 
 def test_agreement_with_exact_varying_P():
-    """Motor loop (P = P0 + P1 sin wt, Q = Q1 sin(wt + 90 deg)) on Hertz: regimes, stick
-    edges (to 1e-4 of the contact width; measured 3e-5 at 512 nodes) and q (L2 1e-3;
-    measured 7e-4) agree with the exact method.
+    """Motor loop (P = P0 + P1 sin wt, Q = Q1 sin(wt + 90 deg)) on Hertz at 512 nodes against the exact
+    method: contact edges (1e-12), regimes, stick edges, q and the dissipation of the second cycle.
 
-    Skipped for the edges: steps whose path runs parallel to a slip line
-    (|dQ/dP| within 1% of f). There points locked at the slip limit make the
-    edge position ill-conditioned (both methods give the same q to 1e-10, but
-    a force mismatch of rounding size moves the edge across them).
+    Stick edges, first order (max 5.5e-4 / 3.1e-4 / 1.9e-4 / 1.3e-4 of W at
+    256 .. 2048 nodes): tolerance 8e-4. q rms (of the exact q's max) 6.2e-3
+    / 3.2e-3 / 3.1e-3 / 1.7e-3: tolerance 8e-3. Dissipation of the second
+    cycle 0.42% low at 256 .. 1024 nodes alike (the time step's error, the
+    lattice's is far below): tolerance 1.2%. Regimes agree on every other
+    step at 256 .. 1024 nodes.
+    Steps that run parallel to a slip line (abs(dQ/dP) within 1% of f) are
+    compared by their dissipation only: there material locked at the slip
+    limit makes the zone pattern ill-conditioned, and the general solver
+    reports a few cells slipping where the exact method sticks, dissipating
+    at most 1.2e-8 of a cycle's energy at 512 nodes (1.1e-5 at 256, 2.9e-9
+    at 1024; tolerance 1e-6).
     """
     problem = NormalProblem(PROFILES["hertz"], A)
     general = GeneralSolver(problem, F, 512)
     exact = ExactMemory(problem, F, 1.3e5)
     path = motor_path()
-    sg, se = general.initial_state(), exact.initial_state()
+    og, oe = march(general, path), march(exact, path)
+    first = 20 + 64  # the second cycle starts after the ramp and one cycle
+    cycle_g = og[-1][0].dissipation - og[first - 1][0].dissipation
+    cycle_e = oe[-1][0].dissipation - oe[first - 1][0].dissipation
+    assert cycle_g == pytest.approx(cycle_e, rel=1.2e-2)
     prev = (0.0, 0.0)
     for i, (P, Q) in enumerate(path):
-        sg, rg = general.step(sg, i + 1.0, Loads(P, Q, 0.0, 0.0))
-        se, re = exact.step(se, i + 1.0, Loads(P, Q, 0.0, 0.0))
-        assert rg.regime == re.regime, i
+        (sg, rg), (se, re) = og[i], oe[i]
+        assert rg.converged, i
         a = se.contact_right
+        W = se.contact_right - se.contact_left
         assert sg.contact_right == pytest.approx(a, rel=1e-12)
         parallel = abs(abs((Q - prev[1]) / (P - prev[0])) - F) < 0.01 * F
-        if not parallel:
-            assert abs(sg.stick_left - se.stick_left) / (2 * a) < 1e-4, i
-            assert abs(sg.stick_right - se.stick_right) / (2 * a) < 1e-4, i
-        x = np.linspace(-a, a, 401)
-        assert l2(general.tractions(sg.memory, x)[1], exact.tractions(se.memory, x)[1]) < 1e-3, i
         prev = (P, Q)
+        if parallel:
+            if re.regime == Regime.STICK:
+                assert sg.dissipation - og[i - 1][0].dissipation < 1e-6 * cycle_e, i
+            continue
+        assert rg.regime == re.regime, i
+        assert abs(sg.stick_left - se.stick_left) / W < 8e-4, i
+        assert abs(sg.stick_right - se.stick_right) / W < 8e-4, i
+        x = np.linspace(-a, a, 401)
+        qg, qe = general.tractions(sg.memory, x)[1], exact.tractions(se.memory, x)[1]
+        assert np.sqrt(np.mean((qg - qe) ** 2)) < 8e-3 * np.max(np.abs(qe)), i
+
+
+def cattaneo_cycles(nodes, stations=None):
+    """Two Cattaneo-Mindlin cycles Q = 0.6 f P0 sin(2 pi k / 40) at constant P0 on Hertz: (general, exact) runs."""
+    problem = NormalProblem(PROFILES["hertz"], A)
+    general = GeneralSolver(problem, F, nodes, stations=stations)
+    exact = ExactMemory(problem, F, P0, stations=stations)
+    path = [(P0, 0.0)] + [(P0, 0.6 * F * P0 * math.sin(2 * math.pi * k / 40)) for k in range(1, 81)]
+    return general, march(general, path), exact, march(exact, path)
 
 
 def test_shift_slip_and_dissipation_against_exact():
-    """Cattaneo-Mindlin cycles at constant P (datum l = profile length scale for both):
-    the rigid shift (rel 1e-3 of its range; log potential from series),
-    the slip of tracked stations (1e-2 of the largest slip of the history; trapezoid
-    slip integral, steep next to the stick edge)
-    and the energy dissipated per cycle (3%; trapezoid in time, 40 steps/cycle)."""
-    problem = NormalProblem(PROFILES["hertz"], A)
-    a = float(problem.half_width(P0))
+    """Cattaneo-Mindlin cycles at constant P, 1024 nodes (datum l = profile length scale for both): the
+    regimes, stick edges, rigid shift, slip of tracked stations and dissipation per cycle agree with the
+    exact method.
+
+    Measured at 256 / 512 / 1024 / 2048 nodes: shift 4.2e-6 / 8.2e-7 /
+    2.6e-7 / 5.0e-8 of its range (order ~2; tolerance 1e-6); slip 9.0e-4 /
+    5.0e-4 / 8.3e-5 / 1.4e-5 of the largest slip (tolerance 3e-4); energy
+    per cycle 2.5e-4 / 6.6e-5 / 1.7e-5 / 3.6e-6 (order ~2; tolerance 5e-5);
+    stick edges 1.7e-3 / 9.2e-4 / 4.4e-4 / 1.6e-4 of W (first order, worst
+    right after a reversal where the new slip zones are a cell wide;
+    tolerance 1e-3). Regimes agree except where the exact slip zones are
+    narrower than a cell (the step after each peak: 9.2e-4 W, 0.95 of a
+    cell at 1024 nodes), where the lattice may see full stick (it does at
+    256 and 512 nodes, where that zone is 0.24 and 0.47 of a cell).
+    """
+    a = float(NormalProblem(PROFILES["hertz"], A).half_width(P0))
+    W = 2 * a
     stations = np.linspace(-a, a, 41)[1:-1]
-    general = GeneralSolver(problem, F, 256, stations=stations)
-    exact = ExactMemory(problem, F, P0, stations=stations)
-    path = [(P0, 0.0)] + [(P0, 0.6 * F * P0 * math.sin(2 * math.pi * k / 40)) for k in range(1, 81)]
-    og, oe = march(general, path), march(exact, path)
+    general, og, exact, oe = cattaneo_cycles(1024, stations)
+    for (sg, rg), (se, re) in zip(og, oe):
+        assert rg.converged
+        narrow = re.regime == Regime.PARTIAL_SLIP and se.contact_right - se.stick_right < W / 1024
+        assert rg.regime == re.regime or (narrow and rg.regime == Regime.STICK)
+        if re.regime == Regime.PARTIAL_SLIP:
+            assert abs(sg.stick_left - se.stick_left) < 1e-3 * W and abs(sg.stick_right - se.stick_right) < 1e-3 * W
     shifts_g = np.array([s.shift for s, _ in og])
     shifts_e = np.array([s.shift for s, _ in oe])
-    span = shifts_e.max() - shifts_e.min()
-    assert np.max(np.abs(shifts_g - shifts_e)) < 1e-3 * span
+    assert np.max(np.abs(shifts_g - shifts_e)) < 1e-6 * (shifts_e.max() - shifts_e.min())
     slips_g = np.array([general.slip(s.memory) for s, _ in og[1:]])
     slips_e = np.array([exact.slip(s.memory) for s, _ in oe[1:]])
     assert np.array_equal(np.isnan(slips_g), np.isnan(slips_e))
-    assert np.nanmax(np.abs(slips_g - slips_e)) <= 1e-2 * np.nanmax(np.abs(slips_e))
+    assert np.nanmax(np.abs(slips_g - slips_e)) <= 3e-4 * np.nanmax(np.abs(slips_e))
     per_cycle_g = og[-1][0].dissipation - og[40][0].dissipation
     per_cycle_e = oe[-1][0].dissipation - oe[40][0].dissipation
-    assert per_cycle_g == pytest.approx(per_cycle_e, rel=3e-2)
+    assert per_cycle_g == pytest.approx(per_cycle_e, rel=5e-5)
 
 
 # ---------------------------------------------------------------------------
@@ -256,27 +376,51 @@ def test_shift_slip_and_dissipation_against_exact():
 
 
 def test_moment_moves_the_contact_and_the_stick_zone():
-    """Hertz with M: P and M raised together (centre x0 = M/P) and then Q gives
-    Cattaneo about x0 (E = 0: 1e-9); moving M at constant P and Q then moves the
-    contact, the edge it moves towards advances stuck, the other recedes slipping,
-    and the stick zone follows the contact."""
-    problem, solver = make("hertz")
-    a = float(problem.half_width(P0))
-    x0 = 0.3 * a
-    out = march(solver, [(P0 * k / 10, 0.0, x0 * P0 * k / 10) for k in range(1, 11)])
-    state, _ = march(solver, [(P0, 0.5 * F * P0, x0 * P0)], out[-1][0])[-1]
-    b = a * math.sqrt(0.5)
-    assert state.stick_left == pytest.approx(x0 - b, abs=1e-9 * a)
-    assert state.stick_right == pytest.approx(x0 + b, abs=1e-9 * a)
-    centres = [0.5 * (state.stick_left + state.stick_right)]
-    for k in range(1, 11):
-        state, report = march(solver, [(P0, 0.5 * F * P0, (x0 - 0.06 * a * k) * P0)], state)[-1]
-        assert report.regime == Regime.PARTIAL_SLIP
-        assert state.contact_left == pytest.approx(x0 - 0.06 * a * k - a, rel=1e-12)
-        assert state.stick_left == state.contact_left  # the advancing edge sticks
-        assert state.contact_left < state.stick_right < state.contact_right
-        centres.append(0.5 * (state.stick_left + state.stick_right))
-    assert np.all(np.diff(centres) < 0.0)
+    """Hertz with M (1024 nodes): P and M raised together (centre x0 = M/P) stick; then Q gives Cattaneo
+    about x0; moving M at constant P and Q then moves the contact, the edge it moves towards advances
+    stuck, the other recedes slipping, and the stick zone follows the contact.
+
+    Cattaneo edges: 1.4e-4 / 6.5e-5 / 1.9e-5 / 1.2e-5 of W at 256 .. 2048
+    nodes; tolerance 9e-5. The contact moves 3% of its width per step, so
+    each step is taken in sub-steps of ``travel`` (default 1%). Material
+    arriving at the advancing edge locks the displacement of the stuck
+    increments of the applied loads; the shear the receding slip zone sheds
+    during the (sub-)step is missed, so a band next to the advancing edge
+    slips a little (physics: it sticks, (S1) holds there). The band is
+    first order in the step and does not shrink with h: 0.051 / 0.082 /
+    0.095 / 0.090 of the edge travel per sub-step at 256 .. 2048 nodes with
+    the default travel (9.5e-4 W at 1024), 1.6e-4 W at 1024 nodes with 12
+    sub-steps per step (travel 0.0025: 0.062 of it; 0.091 at 2048);
+    tolerance 0.2 of the travel per sub-step, and the finer sub-steps at
+    least halve the band (measured 6.1x).
+    """
+    results = {}
+    for travel in (None, 0.0025):
+        problem, solver = make("hertz", travel=travel)
+        a = float(problem.half_width(P0))
+        W = 2 * a
+        x0 = 0.3 * a
+        out = march(solver, [(P0 * k / 10, 0.0, x0 * P0 * k / 10) for k in range(1, 11)])
+        assert all(report.regime == Regime.STICK for _, report in out)
+        state, report = march(solver, [(P0, 0.5 * F * P0, x0 * P0)], out[-1][0])[-1]
+        b = a * math.sqrt(0.5)
+        assert abs(state.stick_left - (x0 - b)) / W < 9e-5 and abs(state.stick_right - (x0 + b)) / W < 9e-5
+        centres = [0.5 * (state.stick_left + state.stick_right)]
+        band = 0.0
+        for k in range(1, 11):
+            state, report = march(solver, [(P0, 0.5 * F * P0, (x0 - 0.06 * a * k) * P0)], state)[-1]
+            assert report.regime == Regime.PARTIAL_SLIP and report.converged
+            assert state.contact_left == pytest.approx(x0 - 0.06 * a * k - a, rel=1e-12)
+            assert solver.stick_intervals(state) == 1
+            assert state.memory.status[-1] == 1  # the receding edge slips
+            assert state.contact_left <= state.stick_left < state.stick_right < state.contact_right
+            band = max(band, (state.stick_left - state.contact_left) / W)
+            centres.append(0.5 * (state.stick_left + state.stick_right))
+        assert np.all(np.diff(centres) < 0.0)
+        per_substep = 0.03 / math.ceil(0.03 / solver.travel)
+        assert band < 0.2 * per_substep, (travel, band)
+        results[travel] = band
+    assert results[0.0025] < results[None] / 2  # measured 6x
 
 
 # ---------------------------------------------------------------------------
@@ -285,46 +429,62 @@ def test_moment_moves_the_contact_and_the_stick_zone():
 
 
 def test_gross_sliding_separation_and_recontact():
-    """abs(Q) > f P slides (and says so), P <= 0 separates and forgets, contact re-forms stuck."""
-    problem, solver = make("hertz")
+    """abs(Q) > f P slides (and says so), P <= 0 separates and forgets, contact re-forms stuck
+    (256 nodes; the re-formed q = (Q/P) p: rms 2.8e-4 of its max, tolerance 1e-3 as for proportional
+    loading, test_proportional_loading_sticks_fully)."""
+    problem, solver = make("hertz", 256)
     out = march(solver, [(P0, 0.0), (P0, 0.5 * F * P0), (P0, 1.2 * F * P0), (P0, 0.3 * F * P0),
                          (0.0, 0.0), (-1.0, 0.0), (P0, 0.2 * F * P0)])
     regimes = [r.regime for _, r in out]
     assert regimes == [Regime.STICK, Regime.PARTIAL_SLIP, Regime.GROSS_SLIDING, Regime.PARTIAL_SLIP,
                        Regime.SEPARATED, Regime.SEPARATED, Regime.STICK]
+    assert all(r.converged for _, r in out)
     assert "gross sliding" in out[2][1].message
     state = out[2][0]
     a = state.contact_right
-    x = np.linspace(-a, a, 201)
+    x = np.linspace(-a, a, 4001)
     p, q = solver.tractions(state.memory, x)
-    assert np.allclose(q, F * p)
+    assert np.max(np.abs(q - F * p)) <= 1e-12 * F * p.max()
+    assert solver.shear_force(state.memory) == pytest.approx(F * P0, rel=1e-12)
     assert math.isnan(state.stick_left) and math.isnan(state.stick_right)
-    assert math.isnan(out[4][0].contact_left) and out[4][0].memory.X.size == 0
-    p, q = solver.tractions(out[-1][0].memory, x)
-    assert np.max(np.abs(q - 0.2 * F * p)) < 1e-6 * F * p.max()
+    separated = out[4][0]
+    assert math.isnan(separated.contact_left) and separated.memory.q.size == 0 and separated.memory.normal is None
+    assert solver.stick_intervals(separated) == 0
+    assert np.all(solver.station_states(separated, x, np.zeros_like(x)) == OUT_OF_CONTACT)
+    state, report = out[-1]
+    assert not report.slipped and not np.any(state.memory.G)
+    p, q = solver.tractions(state.memory, x)
+    assert np.sqrt(np.mean((q - 0.2 * F * p) ** 2)) < 1e-3 * 0.2 * F * p.max()
 
 
 def test_holds_and_normal_solves():
-    """A step that changes neither P nor M solves no normal problem; a hold changes nothing."""
-    problem, solver = make("hertz")
+    """A step that changes neither P nor M solves no normal problem; a hold changes nothing and
+    reports no error estimate (NaN)."""
+    problem, solver = make("hertz", 256)
     (s1, r1), (s2, r2), (s3, r3) = march(solver, [(P0, 0.0), (P0, 0.2 * F * P0), (P0, 0.2 * F * P0)])
     assert r1.normal_solved and not r2.normal_solved and not r3.normal_solved
+    assert solver.counters["normal_solves"] == 1
     assert r3.regime == Regime.STICK and not r3.slipped
     assert s3.memory is s2.memory and s3.dissipation == s2.dissipation
+    assert math.isnan(r3.error_estimate)
 
 
 def test_step_does_not_mutate_its_input():
-    problem, solver = make("punch")
+    problem, solver = make("punch", 256)
     state = march(solver, [(P0, 0.1 * F * P0, 1e-5 * P0, 1e7)])[-1][0]
-    mem = state.memory
-    before = {k: getattr(mem, k).copy() for k in ("X", "E", "kappa", "G", "kind")}
+    fields = ("status", "q", "g", "G", "capacity")
+    memories = (state.memory, state.memory.coarse)
+    before = [{k: getattr(m, k).copy() for k in fields} for m in memories]
+    scalars = (state.shift, state.dissipation, state.stick_left, state.memory.shift, state.memory.first)
     march(solver, [(0.9 * P0, 0.4 * F * P0, 0.0, -1e7), (1.1 * P0, -0.3 * F * P0)], state)
-    for k, v in before.items():
-        arr = getattr(mem, k)
-        assert np.array_equal(arr, v)
-        assert not arr.flags.writeable
-        with pytest.raises(ValueError):
-            arr[...] = 0
+    assert (state.shift, state.dissipation, state.stick_left, state.memory.shift, state.memory.first) == scalars
+    for mem, saved in zip(memories, before):
+        for k, v in saved.items():
+            arr = getattr(mem, k)
+            assert np.array_equal(arr, v)
+            assert not arr.flags.writeable
+            with pytest.raises(ValueError):
+                arr[...] = 0
 
 
 loads_step = st.tuples(
@@ -338,22 +498,21 @@ loads_step = st.tuples(
 @settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(kind=st.sampled_from(sorted(PROFILES)), steps=st.lists(loads_step, min_size=3, max_size=8))
 def test_invariants_on_random_histories(kind, steps):
-    """Equilibrium (carried force 1e-10; numerical integral of the output q 1e-4,
-    trapezoid on 20001 points against square-root edges), no traction outside
-    contact, dissipation non-decreasing, and Coulomb (excess below 2e-3 of
-    f max p, the discretisation level next to the stick edges) on every step
-    the solver reports clean. A step whose message reports a Coulomb excess is
-    one the edge-attached slip zones cannot represent (slip starting inside
-    the contact, which a moment can cause by dragging the contact across
-    material locked at the slip limit); the report must then say so.
-    """
+    """Every step converges (residual <= 1) and reports a finite error estimate when it slipped;
+    dissipation never decreases; no traction outside the contact; equilibrium of the carried force
+    (h sum q_j: measured 4.4e-16 of f P over 844 random steps at 128 nodes; tolerance 1e-12) and of
+    the output q (trapezoid on 20001 points across cell jumps and square-root edges: measured
+    7.5e-5 of f P; tolerance 3e-4); Coulomb (q_j <= f cap_j up to FLIP_TOL = 1e-10 of f max p;
+    measured excess 0, tolerance 1e-9); the stick intervals and the per-station codes agree with
+    the cells (split stick zones: 45 of the 844 steps)."""
     problem, solver = make(kind, 128)
     a0 = float(problem.half_width(P0))
-    path = []
-    for P, Qr, Mr, sigma in steps:
-        path.append((P * P0, Qr * F * P * P0, Mr * P * P0 * a0, sigma))
+    path = [(P * P0, Qr * F * P * P0, Mr * P * P0 * a0, sigma) for P, Qr, Mr, sigma in steps]
     previous = 0.0
     for state, report in march(solver, path):
+        assert report.converged and report.residual <= 1.0, report
+        if report.slipped:
+            assert math.isfinite(report.error_estimate) and report.error_estimate >= 0.0
         assert state.dissipation >= previous
         previous = state.dissipation
         if report.regime == Regime.SEPARATED:
@@ -363,69 +522,197 @@ def test_invariants_on_random_histories(kind, steps):
         p, q = solver.tractions(state.memory, x)
         outside = (x <= L) | (x >= Rr)
         assert np.all(p[outside] == 0.0) and np.all(q[outside] == 0.0)
-        assert solver.shear_force(state.memory) == pytest.approx(state.loads.Q, rel=1e-10, abs=1e-10 * F * P0)
+        fP = F * state.loads.P
+        assert abs(solver.shear_force(state.memory) - state.loads.Q) <= 1e-12 * fP
         integral = float(np.sum(0.5 * (q[1:] + q[:-1]) * np.diff(x)))
-        assert integral == pytest.approx(state.loads.Q, abs=1e-4 * F * state.loads.P)
-        excess = np.max(np.abs(q) - F * p) / (F * p.max())
-        assert excess <= 2e-3 or "Coulomb" in report.message
+        assert abs(integral - state.loads.Q) <= 3e-4 * fP
+        assert np.max(np.abs(q) - F * p) <= 1e-9 * F * p.max()
+        status = state.memory.status
+        runs = np.count_nonzero(np.diff(np.concatenate(([0], (status == 0).astype(np.int8), [0]))) == 1)
+        assert solver.stick_intervals(state) == runs
+        codes = solver.station_states(state, state.memory.x, solver.tractions(state.memory, state.memory.x)[1])
+        expected = np.select([status == 0, status > 0, status < 0], [STICK, FORWARD_SLIP, BACKWARD_SLIP])
+        inside = (state.memory.x >= L) & (state.memory.x <= Rr)
+        assert np.array_equal(codes[inside], expected[inside])
 
 
 @pytest.mark.parametrize("kind", PROFILES)
 def test_convergence_under_refinement(kind):
-    """Mindlin unloading (J2): the q error falls steadily with the resolution, at an observed
-    order of 0.7-0.9 (log2 of the error ratio per doubling; limited by the square-root
-    onset of the strain frozen at the first stick edge); measured 4.0e-4 / 1.5e-4 / 4.5e-5
-    (Hertz) and 4.6e-4 / 2.4e-4 / 1.0e-4 (punch) at 64 / 256 / 1024 nodes."""
+    """At 64 / 256 / 1024 nodes: the J2 shear (unloading from 0.6 f P to 0) and the J1 stick edges
+    (worst over Q = 0.1 .. 0.9 f P) converge at about first order.
+
+    Observed order per doubling (two doublings per pair): J2 q rms 1.07 /
+    0.73 (Hertz: 5.0e-2, 1.1e-2, 4.1e-3) and 0.98 / 0.69 (punch: 6.6e-2,
+    1.7e-2, 6.6e-3); J1 edges 1.34 / 0.92 (Hertz: 3.0e-3, 4.6e-4, 1.3e-4 of
+    W) and 1.88 / 0.90 (punch: 8.4e-3, 6.2e-4, 1.8e-4). Asserted: every order
+    above 0.35 (half the smallest), the J2 rms at 1024 below 2e-2 and the J1
+    edges at 1024 below half a cell (measured 0.13 and 0.18 of a cell).
+    """
     problem = NormalProblem(PROFILES[kind], A)
     Q_max = 0.6 * F * P0
     a = float(problem.half_width(P0))
-    x = np.linspace(-a, a, 2001)
-    q_closed = (-F * problem.pressure(x, P0) + 2 * F * problem.pressure(x, P0 - Q_max / (2 * F))
-                - F * problem.pressure(x, P0 - Q_max / F))
-    errors = []
+    W = 2 * a
+    x = np.linspace(-a, a, 4001)
+    q_closed = j2_closed(problem, x, Q_max, 0.0)
+    rms, edges = [], []
     for nodes in (64, 256, 1024):
         solver = GeneralSolver(problem, F, nodes)
-        state = march(solver, [(P0, 0.0), (P0, Q_max), (P0, 0.0)])[-1][0]
-        errors.append(l2(solver.tractions(state.memory, x)[1], q_closed))
-    order = np.log2(np.array(errors[:-1]) / np.array(errors[1:])) / 2.0  # two doublings per pair
-    assert np.all(order > 0.4), (errors, order)
-    assert errors[-1] < 2e-4
+        out = march(solver, [(P0, 0.0), (P0, Q_max), (P0, 0.0)])
+        rms.append(q_errors(solver.tractions(out[-1][0].memory, x)[1], q_closed, x, [], W)[0])
+        worst = 0.0
+        for ratio in np.linspace(0.1, 0.9, 9):
+            state = march(solver, [(P0, ratio * F * P0)], out[0][0])[-1][0]
+            b = float(problem.half_width(P0 - ratio * P0))
+            worst = max(worst, abs(state.stick_left + b) / W, abs(state.stick_right - b) / W)
+        edges.append(worst)
+    for errors in (rms, edges):
+        order = np.log2(np.array(errors[:-1]) / np.array(errors[1:])) / 2.0
+        assert np.all(order > 0.35), (rms, edges, order)
+    assert rms[-1] < 2e-2
+    assert edges[-1] < 0.5 / 1024
 
 
-def test_step_size_control_cuts_the_dissipation_error_of_a_coarse_loop():
-    """edge_travel sub-steps slipping steps whose stick edges move far (a step-size controller).
+def test_dissipation_per_cycle_converges():
+    """The energy per Cattaneo-Mindlin cycle against the exact method converges at about second order:
+    relative error 2.5e-4 at 256 nodes, 1.7e-5 at 1024 (order 1.9 per doubling); asserted: order above
+    1 and the error at 1024 below 5e-5."""
+    errors = []
+    for nodes in (256, 1024):
+        _, og, _, oe = cattaneo_cycles(nodes)
+        per_cycle_g = og[-1][0].dissipation - og[40][0].dissipation
+        per_cycle_e = oe[-1][0].dissipation - oe[40][0].dissipation
+        errors.append(abs(per_cycle_g / per_cycle_e - 1.0))
+    assert math.log2(errors[0] / errors[1]) / 2.0 > 1.0, errors
+    assert errors[1] < 5e-5
 
-    The motor loop (P and Q a quarter period apart) in 25 steps per cycle, against
-    the exact method on the same polygon (exact for it): the general solver's
-    dissipation per cycle is off by 1.7 % (first order in the step); with
-    edge_travel = 0.005 by 0.33 % (measured, 256 nodes). Bound: at least 3x smaller,
-    and the permanent stick zone unchanged to 1e-4 of the width.
+
+# ---------------------------------------------------------------------------
+# the new design: sub-steps, the error estimate, split stick zones, restarts
+# ---------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("kind", PROFILES)
+def test_substeps_cut_the_dissipation_error_of_a_growing_slipping_contact(kind):
+    """P and Q raised together at dQ/dP = 1.2 f (slipping while the contact grows), then Q reversed
+    while P keeps growing, in two straight steps (512 nodes), against the exact method.
+
+    Without sub-steps (travel = stick_travel = 0) the dissipation is 8.2%
+    (Hertz) / 7.5% (punch) low; with sub-steps of the contact travel alone
+    (stick_travel = 0) the error falls at about second order in the sub-step
+    (Hertz: 2.05 / 0.71 / 0.22 / 0.052% for travel 0.08 / 0.04 / 0.02 /
+    0.01; punch: 5.1 / 1.35 / 0.28% for 0.04 / 0.02 / 0.01; the same to 0.1%
+    at 1024 nodes), and with the defaults it is 0.052% / 0.28%. Asserted:
+    above 4% without, below 1% at the defaults, and travel 0.01 at least 6x
+    better than 0.04 (measured 13.6x / 18.5x: order above 1.3).
     """
-    import halfslip as hs
+    problem = NormalProblem(PROFILES[kind], A)
+    path = [(0.5 * P0, 0.0), (P0, 1.2 * F * 0.5 * P0), (1.5 * P0, -0.1 * F * P0)]
+    reference = march(ExactMemory(problem, F, 2 * P0), path)[-1][0].dissipation
+    errors = {}
+    for travel, stick_travel in ((0.0, 0.0), (0.04, 0.0), (0.01, 0.0), (None, None)):
+        solver = GeneralSolver(problem, F, 512, travel=travel, stick_travel=stick_travel)
+        out = march(solver, path)
+        assert all(report.converged for _, report in out)
+        assert (solver.counters["substeps"] > 0) == (travel != 0.0)
+        errors[travel] = out[-1][0].dissipation / reference - 1.0
+    assert abs(errors[0.0]) > 4e-2, errors
+    assert abs(errors[None]) < 1e-2, errors
+    assert abs(errors[0.01]) < abs(errors[0.04]) / 6, errors
 
-    text = """
-name: motor-coarse
-material: {E: 200.0e9, nu: 0.3}
-friction: 0.6
-geometry: {kind: hertz, radius: 0.05}
-loads:
-  - ramp: {to: {P: 1.0e5, Q: 3.0e4}, duration: 1, steps: 10}
-  - cycles: {count: 3, period: 1, steps_per_cycle: 25, P: {amplitude: 3.0e4},
-             Q: {mean: 0.0, amplitude: 3.0e4, phase: 90}}
-solver: {nodes: 256, skip_steady_cycles: false}
-output: {fields: []}
-"""
-    scene = hs.parse_scene(text)
-    exact = hs.simulate(scene, method="exact")
-    plain = hs.simulate(scene, method="general")
-    controlled = hs.simulate(hs.parse_scene(text.replace("nodes: 256,", "nodes: 256, edge_travel: 0.005,")),
-                             method="general")
 
-    def last_cycle(ds):
-        return float(ds.dissipation[-1] - ds.dissipation.sel(t=3.0)), float(ds.sel(t=slice(3.0, 4.0)).stick_right.min())
+def test_error_estimate_on_every_slipping_step_bounds_the_edge_error():
+    """The two-grid estimate (distance of the stick edges to a half-resolution shadow's, / W; the largest
+    of a step's sub-steps) is reported on every slipping step and bounds the actual edge error within a
+    measured factor.
 
-    (D_ref, b_ref), (D0, b0), (D1, b1) = map(last_cycle, (exact, plain, controlled))
-    width = 2 * float(exact.contact_right.sel(t=slice(3.0, 4.0)).min())
-    assert abs(D1 - D_ref) < abs(D0 - D_ref) / 3
-    assert abs(b1 - b_ref) < 1e-4 * width and abs(b0 - b_ref) < 1e-4 * width
-    assert controlled.attrs["count_steps"] == plain.attrs["count_steps"]  # sub-steps are inside steps
+    J1 (Q = 0.25, 0.5, 0.75 f P) and J2 (unloading from 0.6 f P to 0.4, 0,
+    -0.5 of it) on both profiles at 128 / 256 / 512 nodes (36 steps): actual
+    / estimate is 0.21 in the median and at most 1.09 (punch, 128 nodes, J1
+    at 0.25); asserted: at most 3 on every step, below 0.6 in the median.
+    Over a denser scan (17 ratios and 12 unloadings per resolution) the
+    worst case is 2.1 (Hertz, 512 nodes, J1 at 0.15: error 1.7e-4 of W,
+    estimate 8.2e-5). The memory keeps the last sub-step's estimate (at most
+    the reported one). Without the shadow (estimate=False) the report
+    carries NaN.
+    """
+    ratios = []
+    for kind in PROFILES:
+        for nodes in (128, 256, 512):
+            problem, solver = make(kind, nodes)
+            a = float(problem.half_width(P0))
+            W = 2 * a
+            base = march(solver, [(P0, 0.0)])[-1][0]
+            cases = []
+            for ratio in (0.25, 0.5, 0.75):
+                state, report = march(solver, [(P0, ratio * F * P0)], base)[-1]
+                cases.append((state, report, float(problem.half_width(P0 - ratio * P0))))
+            Q_max = 0.6 * F * P0
+            loaded = march(solver, [(P0, Q_max)], base)[-1][0]
+            for fraction in (0.4, 0.0, -0.5):
+                state, report = march(solver, [(P0, fraction * Q_max)], loaded)[-1]
+                cases.append((state, report, float(problem.half_width(P0 - (1 - fraction) * Q_max / (2 * F)))))
+            for state, report, b in cases:
+                assert report.slipped and report.regime == Regime.PARTIAL_SLIP
+                estimate = report.error_estimate
+                assert math.isfinite(estimate) and estimate > 0.0 and state.memory.error <= estimate
+                actual = max(abs(state.stick_left + b), abs(state.stick_right - b)) / W
+                assert actual <= 3.0 * estimate, (kind, nodes, b, actual, estimate)
+                ratios.append(actual / estimate)
+    assert np.median(ratios) < 0.6, np.median(ratios)
+    problem, solver = make("hertz", 256, estimate=False)
+    _, report = march(solver, [(P0, 0.0), (P0, 0.5 * F * P0)])[-1]
+    assert report.slipped and math.isnan(report.error_estimate)
+
+
+def test_split_stick_zones_are_represented():
+    """One step from zero on the rounded punch to (1.18 P0, -0.89 f P, 0.1 P a0, -2e7 Pa): the converged
+    answer has two stick intervals, [0.025, 0.088] and [0.139, 0.999] of the contact (from its left
+    edge), with backward slip at the left edge and between them.
+
+    Found in random histories (5% of the steps have split stick zones);
+    every boundary agrees to 0.001 of W at 256 / 512 / 1024 / 2048 nodes
+    (within one cell of 256). Asserted at 256 and 1024 nodes: two stick
+    intervals, the boundaries within two cells of 256 of each other, and
+    the per-station codes backward / stick / backward / stick across them.
+    """
+    boundaries = []
+    for nodes in (256, 1024):
+        problem, solver = make("punch", nodes)
+        a0 = float(problem.half_width(P0))
+        P = 1.18 * P0
+        state, report = march(solver, [(P, -0.89 * F * P, 0.1 * P * a0, -2e7)])[-1]
+        assert report.converged and report.regime == Regime.PARTIAL_SLIP
+        assert solver.stick_intervals(state) == 2
+        mem = state.memory
+        W = state.contact_right - state.contact_left
+        stuck = np.concatenate(([0], (mem.status == 0).astype(np.int8), [0]))
+        starts, stops = np.flatnonzero(np.diff(stuck) == 1), np.flatnonzero(np.diff(stuck) == -1)
+        left_faces = (mem.first + np.arange(mem.q.size)) * mem.spacing
+        cells = np.concatenate((left_faces, [left_faces[-1] + mem.spacing]))
+        boundaries.append(np.array([cells[starts[0]], cells[stops[0]], cells[starts[1]]]) - state.contact_left)
+        boundaries[-1] /= W
+        assert np.all(mem.status[:starts[0]] == -1) and np.all(mem.status[stops[0]:starts[1]] == -1)
+        stations = state.contact_left + W * np.array([0.01, 0.06, 0.115, 0.5])
+        codes = solver.station_states(state, stations, solver.tractions(mem, stations)[1])
+        assert codes.tolist() == [BACKWARD_SLIP, STICK, BACKWARD_SLIP, STICK]
+        assert abs(state.stick_left - (state.contact_left + boundaries[-1][0] * W)) <= mem.spacing
+    assert np.all(np.abs(boundaries[0] - boundaries[1]) < 2 / 256), boundaries
+
+
+def test_projected_gradient_restart_finds_the_answer(monkeypatch):
+    """With the active set cut to one iteration before each restart (MAX_ACTIVE_SET = 1), the
+    projected-gradient restart still finds the unique answer: a J1 step (Hertz, 128 nodes, not
+    sub-stepped) converges, its restarts are counted (measured 2: the fine lattice and the shadow),
+    and the state equals the unrestricted one (the strictly convex problem has one solution: same
+    pattern, q to 1e-9 of f max p, measured 0). About 2 s per restart (2000 gradient iterations)."""
+    path = [(P0, 0.0), (P0, 0.5 * F * P0)]
+    reference = march(make("hertz", 128, stick_travel=0.0)[1], path)[-1][0]
+    monkeypatch.setattr(general_module, "MAX_ACTIVE_SET", 1)
+    problem, solver = make("hertz", 128, stick_travel=0.0)
+    out = march(solver, path)
+    assert all(report.converged for _, report in out)
+    assert solver.counters["restarts"] > 0
+    state = out[-1][0]
+    assert np.array_equal(state.memory.status, reference.memory.status)
+    scale = F * float(reference.memory.capacity.max())
+    assert np.max(np.abs(state.memory.q - reference.memory.q)) <= 1e-9 * scale

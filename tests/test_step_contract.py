@@ -8,10 +8,13 @@ import numpy as np
 import pytest
 
 import halfslip as hs
+import halfslip.solvers.general as general_module
 from halfslip.cli import summarize
+from halfslip.geometry import Hertz, NormalProblem
 from halfslip.solvers.base import TangentialSolver
 from halfslip.solvers.exact import ExactMemory
-from halfslip.solvers.general import GeneralSolver
+from halfslip.solvers.general import CHECK_TOL, GeneralSolver
+from halfslip.state import Loads
 
 SCENE = textwrap.dedent("""
     name: contract
@@ -42,28 +45,73 @@ def test_converged_steps_are_recorded(tmp_path):
 
 def test_a_failed_step_is_stored_counted_and_summarised(monkeypatch, tmp_path):
     """A step the solver could not solve to its tolerance is kept in the result whatever
-    output.every says, counted, and named in the summary: it never looks like a right one."""
-    original = GeneralSolver._slip_solve
-    calls = []
+    output.every says, counted, and named in the summary: it never looks like a right one.
 
-    def failing_once(self, *args):
-        chosen, message, converged, violation = original(self, *args)
-        calls.append(1)
-        if len(calls) == 3:  # the third slip solve of the run: say it missed its checks
-            return chosen, "forced", False, 7.5
-        return chosen, message, converged, violation
+    In the sixth step (the second with slip), every answer of the fine lattice's active set (the
+    whole step and each sub-step it is retaken in) comes back with its equilibrium off by 7.5 times
+    the check's tolerance (one stick cell's shear raised by 7.5 CHECK_TOL f P / h, far inside its
+    Coulomb bound: 4e-5 of it). The step's own verification must see it and report converged=False
+    with residual 7.5 (the worst of its sub-steps), and the simulator must record and count it.
+    """
+    original_step, original_solve = GeneralSolver.step, GeneralSolver._active_set
+    seen = {"steps": 0, "perturbed": 0}
 
-    monkeypatch.setattr(GeneralSolver, "_slip_solve", failing_once)
-    monkeypatch.setattr("halfslip.solvers.general.MAX_SPLITS", 0)  # no splitting: the failure stays
+    def counting_step(self, *args):
+        seen["steps"] += 1
+        return original_step(self, *args)
+
+    def perturbed_once(self, lat, n, r, qmax, total, status, gscale):
+        q, delta, pattern, Tq, iterations, restarts = original_solve(self, lat, n, r, qmax, total, status, gscale)
+        if lat.h == min(self._lattices):  # the fine lattice (the error estimate's shadow is twice as coarse)
+            if seen["steps"] == 6:
+                stick = np.flatnonzero(pattern == 0)
+                cell = stick[np.argmax(qmax[stick] - np.abs(q[stick]))]  # the stick cell furthest from its bound
+                q = q.copy()
+                q[cell] += 7.5 * CHECK_TOL * float(np.sum(qmax))  # h sum qmax = f P
+                seen["perturbed"] += 1
+        return q, delta, pattern, Tq, iterations, restarts
+
+    monkeypatch.setattr(GeneralSolver, "step", counting_step)
+    monkeypatch.setattr(GeneralSolver, "_active_set", perturbed_once)
     scene = hs.parse_scene(SCENE)
     ds = hs.simulate(scene)
-    assert len(calls) > 3
+    assert seen["steps"] == 16 and seen["perturbed"] >= 1
     assert ds.attrs["count_failed_steps"] == 1
     bad = ds["converged"].values == 0
-    assert bad.sum() == 1 and ds["residual"].values[bad][0] == pytest.approx(7.5)
+    assert bad.sum() == 1 and ds["residual"].values[bad][0] == pytest.approx(7.5, rel=1e-6)
+    assert np.all(ds["residual"].values[~bad] <= 1.0)
+    assert ds["t"].values[bad][0] == pytest.approx(1.0 + 2.0 / 12.0)  # the sixth step
     assert ds.sizes["t"] == 3  # the initial state, the failed step (off the every-100 grid), the last step
     text = "\n".join(summarize(ds, tmp_path / "x.h5"))
     assert "NOT CONVERGED: 1 of 16 steps" in text and "7.5 x tolerance" in text
+
+
+def test_an_active_set_that_cannot_converge_is_reported(monkeypatch, tmp_path):
+    """The active set is cut to one iteration before each restart (MAX_ACTIVE_SET = 1) and the
+    projected-gradient restart is disabled (it returns the all-stick pattern), so no step whose
+    pattern must change can converge: those steps return their last iterate with converged=False
+    and a residual above 1 (the all-stick iterate violates Coulomb), the message says why, and the
+    simulator records and counts every one of them. (MAX_ACTIVE_SET = 1 alone is not enough: the
+    restarts find the answer, test_general.test_projected_gradient_restart_finds_the_answer.)"""
+    monkeypatch.setattr(general_module, "MAX_ACTIVE_SET", 1)
+    monkeypatch.setattr(general_module, "_projected_gradient",
+                        lambda lat, n, r, qmax, total, q0, iterations=0: np.zeros(n, np.int8))
+    problem = NormalProblem(Hertz(radius=50e-3), 4 * (1 - 0.3**2) / 200e9)
+    solver = GeneralSolver(problem, 0.6, 64)
+    state = solver.initial_state()
+    state, report = solver.step(state, 1.0, Loads(1e5, 0.0, 0.0, 0.0))
+    assert report.converged and report.residual <= 1.0  # full stick: the first pattern is right
+    state, report = solver.step(state, 2.0, Loads(1e5, 3e4, 0.0, 0.0))
+    assert not report.converged and report.residual > 1.0
+    assert "active set not converged" in report.message
+    assert solver.counters["restarts"] > 0
+    ds = hs.simulate(hs.parse_scene(SCENE))
+    failed = int(ds.attrs["count_failed_steps"])
+    bad = ds["converged"].values == 0
+    assert failed >= 1 and bad.sum() == failed
+    assert np.all(ds["residual"].values[bad] > 1.0)
+    text = "\n".join(summarize(ds, tmp_path / "x.h5"))
+    assert f"NOT CONVERGED: {failed} of 16 steps" in text
 
 
 def test_station_states_follow_cattaneo_mindlin():

@@ -267,7 +267,8 @@ class GeneralSolver(TangentialSolver):
             reports.append(rep)
         last = reports[-1]
         message = "; ".join(dict.fromkeys(r.message for r in reports if r.message))
-        return sub, StepReport(last.regime, any(r.slipped for r in reports), True, message,
+        return sub, StepReport(last.regime, any(r.slipped for r in reports), any(r.normal_solved for r in reports),
+                               message,
                                converged=all(r.converged for r in reports),
                                residual=max(r.residual for r in reports),
                                iterations=sum(r.iterations for r in reports),
