@@ -2,28 +2,49 @@
 
 Fast variants run by default; long ones (marked slow) with ``pytest --runslow``.
 Every step of every history goes through :func:`check_step`, which asserts the
-invariants of physics.md: finite values, non-decreasing dissipation, Coulomb
-(abs(q) <= f p), equilibrium of the output tractions (int p = P, int p x = M,
-int q = Q, by quadrature of ``solver.tractions``), the stick zone inside the
-contact, a bounded stuck solution on STICK steps (consistency residual) and a clean
-report (no fallback message). Where the answer is known in
-closed form (physics.md J1, J2, the moderate bulk-tension shift, SS2, the
-Jaeger-Ciavarella construction generalised to a moment) it is asserted too.
+invariants of physics.md: finite values, non-decreasing dissipation, a converged
+step (``report.converged``: the step's own verification of Coulomb, slip
+direction, stick and equilibrium passed) with no message but gross sliding or
+separation, Coulomb (abs(q) <= f p), equilibrium of the output tractions
+(int p = P, int p x = M, int q = Q, by quadrature of ``solver.tractions``), the
+lattice cells in contact and the stick zone inside the contact. Where the answer
+is known in closed form (physics.md J1, J2, the moderate bulk-tension shift,
+SS2, the Jaeger-Ciavarella construction generalised to a moment) it is asserted
+too, to a tolerance set from the measured convergence of the lattice solver
+(each test's docstring states the measurements). Random straight-ramp histories
+(hypothesis, section 7) assert the step's optimality conditions cell by cell.
 
-Cases that expose a solver defect are kept, with the assertion that fails, and
-skipped with the reason "BUG: ..." (nothing is marked xfail).
+Cases that expose a solver defect are kept with the assertion that fails, and
+their docstrings give the measured failure; nothing is skipped or marked xfail.
+At the time of writing: the cell capacities of the rounded punch miss the kink
+of p at the ends of the flat, so int q != Q on the punch (every punch history:
+test_capacity_is_the_mean_pressure_of_each_cell); steps into gross sliding
+report slip increments against the shear (test_gross_sliding_slips_with_the_shear);
+a contact formed near gross sliding with a moment returns NaN
+(test_contact_formed_near_gross_sliding_with_a_moment); the lattice does not
+resolve J1's stick zone on the punch flat as Q -> f P
+(test_stick_zone_vanishes_in_small_increments), nor q = (Q/P) p on a punch whose
+contact barely passes its flat (test_separation_recontact_and_tiny_loads); and
+the state after a slip step with a reversal on Hertz depends on how the step is
+split (test_step_splitting_after_slip, test_tiny_steps_after_slip).
 
-Quadrature. p and q vanish like square roots at the contact edges, q* like a
-square root at the stick edges, q has logarithmic kinks at every knot of the
-piecewise-linear stick data and square-root points at the singular material
-points, and p has x ln x kinks at the ends of a punch flat. The contact is cut at
-all of these, the panels next to each special point are graded geometrically
-(ratio 4, down to 4^-19 of the width), and every panel is integrated by 12-point
-Gauss-Legendre in theta after x = c + d sin(theta), which removes the square
-roots at the panel ends (8 points leave 2e-10 next to the x ln x kinks of a punch).
-Against 16-point rules with ratio-2 grading and against 50-digit integrals of the
-closed-form pressure, this integrates p, p x and q to ~1e-11 (the tolerances below
-are set from that).
+The solver (src/halfslip/solvers/general.py) puts a lattice of cells of width
+h = width / nodes on the surface; each cell in contact carries a constant shear
+q_j, and the output traction is q(x) = (q_j / cap_j) p(x) in cell j, cap_j the
+mean pressure over the cell (the end cells reach to the contact edges). Stick
+edges converge at about first order in h (a fraction of a cell), q at O(1)
+pointwise in the cells at the stick edges and at about first order in L2.
+
+Quadrature. q / p is constant on each cell, and p vanishes like a square root at
+the contact edges and has x ln x kinks at the ends of a punch flat. The contact
+is cut at every cell boundary and at the flat ends, the panels next to the flat
+ends and to the contact edges are graded geometrically (ratio 2, down to 2^-44 of
+the width), and every panel is integrated by 16-point Gauss-Legendre in theta
+after x = c + d sin(theta) (c, d: the panel's centre and half-width), which
+removes the square roots at the contact edges. Against 24 and 32 points this
+integrates p and p x to ~3e-15 of P (an edge just outside a coarse panel, e.g. a
+contact edge 7.5e-5 of the width beyond a grading cut of the flat's end, costs
+1.8e-9 without the grading towards the contact edges).
 """
 from __future__ import annotations
 
@@ -31,48 +52,52 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from scipy.optimize import brentq
 
 from halfslip.geometry import Hertz, NormalProblem, RoundedPunch
-from halfslip.solvers import _general_points as points
-from halfslip.solvers.general import COULOMB_TOL, SINGULAR_LEFT, GeneralSolver
+from halfslip.solvers.general import GeneralSolver
 from halfslip.state import GROSS_SLIDING_MESSAGE, Loads, Regime
 
 import helpers
-from helpers import A, F
-P0 = 1.0e5
-from helpers import R_CORNER, R_HERTZ, W_FLAT
+from helpers import A, F, P0, R_CORNER, R_HERTZ, W_FLAT
+
 EPS = float(np.finfo(float).eps)
 
 # --- invariant tolerances -----------------------------------------------------
-#: int p dx = P (relative). The normal problem stops at 1e-13 and is exact for these
-#: profiles; the quadrature above is good to ~1e-11 (measured <= 5e-11 on these histories).
-P_TOL = 1e-10
-#: int p x dx = M, relative to P times the contact width (same sources as P_TOL).
-M_TOL = 1e-10
-#: int q dx = Q, relative to f P. The solver carries the force exactly (a fix-up force
-#: absorbs the discretisation residual of equilibrium), and the output q is the exact
-#: inversion of the same piecewise-linear data; the two agree to rounding in the sums
-#: over clustered knots (measured <= 2e-9 f P on these histories), hence 1e-8.
-Q_TOL = 1e-8
-#: solver.shear_force (the force of the representation) = Q, relative to f P: the fix-up
-#: force makes it exact up to rounding.
-FORCE_TOL = 1e-10
-#: Coulomb: the solver accepts a configuration whose excess abs(q) - f p is below
-#: COULOMB_TOL (1e-3) of f max p; the same bound is asserted everywhere on the contact.
-
-#: Consistency residual gamma_0 of a full-stick step (state.memory.residual, relative to f max p):
-#: zero in exact arithmetic, a discretisation estimate otherwise (measured <= 6e-17 on every
-#: STICK step here). A stuck solution accepted with a residual above the solver's own stick
-#: acceptance (STICK_COULOMB_TOL = 1e-3) would not be bounded at the edges: its force would
-#: sit in the fix-up term instead.
-RESIDUAL_TOL = 1e-3
-
-#: Edges, when compared with a closed form that is exact for the solver's data
-#: (E piecewise linear: J1, J2 after gross sliding, the moderate tension shift, the
-#: generalised Jaeger-Ciavarella): Newton stops at a scaled residual of 1e-12, which
-#: places the edges to ~1e-12 of the width; 1e-9 of the width leaves rounding room.
-EXACT_EDGE_TOL = 1e-9
+#: int p dx = P (relative). The normal problem stops at a scaled residual of 1e-13 and the
+#: quadrature is good to ~3e-15 (against 24 and 32 points); measured <= 9.5e-14 on the
+#: histories of this file (a moment lifting part of the punch flat) and <= 8.8e-14 on 600
+#: random histories.
+P_TOL = 5e-13
+#: int p x dx = M, relative to P (W + abs(x0)), W the contact width and x0 its centre (same
+#: sources; a contact far off the origin carries the relative error of int p into int p x):
+#: measured <= 4.3e-14.
+M_TOL = 2e-13
+#: int q dx by quadrature of ``solver.tractions`` = ``solver.shear_force`` = h sum q_j,
+#: relative to f P: q = (q_j / cap_j) p on cell j, so the two agree when cap_j is the mean
+#: pressure over the cell. The solver integrates each cell by a 4-point Gauss rule in theta,
+#: exact to ~1e-12 of a cell's load where p is smooth in theta (Hertz): measured <= 5.1e-13 f P
+#: on the histories of this file, <= 4.7e-12 f P on 300 random Hertz histories (64-256
+#: nodes). (On the rounded punch the cells that contain an end of the flat, where p has an
+#: x ln x kink, have capacities off by up to 6e-2 of h max cap, and int q - Q reaches
+#: 1e-4 f P: see test_capacity_is_the_mean_pressure_of_each_cell.)
+Q_TOL = 2e-11
+#: solver.shear_force = Q (or the gross-sliding force sign(Q) f P), relative to f P.
+#: Equilibrium of the step's problem is exact up to the rounding of the rigid shift, which
+#: carries the displacement scale of the largest load of the history: measured 2.2e-10 f P
+#: on re-contact at P = 1e-12 P0 after a history at P0 (Hertz), <= 5e-16 f P elsewhere and
+#: on 600 random histories.
+FORCE_TOL = 1e-9
+#: Coulomb, relative to f max p, pointwise and per cell: cells that slip carry q_j =
+#: +-f cap_j exactly; a stick cell turns to slip only when it exceeds its bound by more than
+#: general.FLIP_TOL = 1e-10 of f max cap, hence 10 x that. Measured <= 3e-13 on the
+#: histories of this file (<= 512 nodes), 0 on the random ones, 8e-11 at 4096 nodes.
+COULOMB_TOL = 1e-9
+#: h sum cap = P (relative): the solver normalises the capacities to it; rounding of a sum
+#: over up to ~2000 cells (measured <= 5.6e-16).
+CAPACITY_TOL = 1e-13
 
 
 # --- set-up -------------------------------------------------------------------
@@ -84,8 +109,8 @@ def punch_problem(w=W_FLAT, radius=R_CORNER, compliance=A):
     return NormalProblem(RoundedPunch(w, radius), compliance)
 
 
-def make(kind, nodes=128):
-    return helpers.make(kind, "general", nodes=nodes)
+def make(kind, nodes=128, **kw):
+    return helpers.make(kind, "general", nodes=nodes, **kw)
 
 
 def breaks_of(problem):
@@ -95,25 +120,32 @@ def breaks_of(problem):
     return np.zeros(0)
 
 
+def cells_per_width(state):
+    """Lattice spacing h relative to the contact width of ``state``."""
+    return state.memory.spacing / (state.contact_right - state.contact_left)
+
+
 # --- quadrature over the contact -------------------------------------------------
-_THETA, _WEIGHT = np.polynomial.legendre.leggauss(12)
+_THETA, _WEIGHT = np.polynomial.legendre.leggauss(16)
 _THETA = 0.5 * math.pi * _THETA
 _WEIGHT = 0.5 * math.pi * _WEIGHT
-_GRADING = 0.25 ** np.arange(1, 20)
+_GRADING = 0.5 ** np.arange(1, 45)
+
+
+def cell_bounds(memory):
+    """Boundaries of the cells in contact, the end cells reaching to the contact edges."""
+    inner = (memory.first + 1 + np.arange(memory.q.size - 1)) * memory.spacing
+    return np.concatenate(([memory.normal.left], inner, [memory.normal.right]))
 
 
 def contact_nodes(solver, memory):
     """Quadrature points x and weights over the contact (see the module docstring)."""
-    normal, shear = memory.normal, memory.shear
+    normal = memory.normal
     L, R = normal.left, normal.right
     W = R - L
     breaks = breaks_of(solver.problem)
-    special = [L, R, *breaks, *memory.X[memory.kind >= SINGULAR_LEFT]]
-    cuts = [np.array([L, R]), memory.X, breaks]
-    if shear.radius > 0.0:
-        special += [shear.stick_left, shear.stick_right]
-        cuts.append(shear.center + shear.radius * np.asarray(shear.knots[0]))
-    for s in special:
+    cuts = [cell_bounds(memory), breaks, L + W * _GRADING, R - W * _GRADING]
+    for s in breaks:
         cuts += [s - W * _GRADING, s + W * _GRADING]
     cuts = np.unique(np.clip(np.concatenate(cuts), L, R))
     lo, hi = cuts[:-1, None], cuts[1:, None]
@@ -121,6 +153,23 @@ def contact_nodes(solver, memory):
     x = (centre + half * np.sin(_THETA)).ravel()
     w = (half * np.cos(_THETA) * _WEIGHT).ravel()
     return x, w
+
+
+def cell_integrals(solver, memory):
+    """int p over each cell (the end cells to the contact edges), by the quadrature above."""
+    x, w = contact_nodes(solver, memory)
+    j = np.clip(np.searchsorted(cell_bounds(memory), x) - 1, 0, memory.q.size - 1)
+    return np.bincount(j, weights=w * memory.normal.pressure(x), minlength=memory.q.size)
+
+
+def capacity_report(solver, memory):
+    """Where h cap_j differs most from int p over cell j (what makes int q differ from h sum q_j)."""
+    err = (cell_integrals(solver, memory) - memory.spacing * memory.capacity) / (
+        memory.spacing * float(np.max(memory.capacity)))
+    k = int(np.argmax(np.abs(err)))
+    bounds = cell_bounds(memory)
+    return (f"cell {k} of {err.size} [{bounds[k]:.9g}, {bounds[k + 1]:.9g}] m: h cap - int p = "
+            f"{-err[k]:.3g} of h max cap")
 
 
 def normal_conditioning(problem, normal):
@@ -141,61 +190,154 @@ def normal_conditioning(problem, normal):
 ALLOWED_MESSAGES = ("", GROSS_SLIDING_MESSAGE)
 
 
-def check_step(solver, prev, state, report, clean=True):
+def check_step(solver, prev, state, report):
     """Assert the invariants of one step; return (x, w, p, q) on the contact (None if separated)."""
     mem = state.memory
     assert all(math.isfinite(v) for v in (state.t, *state.loads, state.shift, state.dissipation))
     assert state.dissipation >= prev.dissipation
-    if clean:
-        assert report.message in ALLOWED_MESSAGES or report.message.startswith("separated"), report.message
+    assert report.converged and report.residual <= 1.0, (
+        f"step to {state.loads} not converged: residual {report.residual:.3g} x tolerance ({report.message})")
+    assert report.message in ALLOWED_MESSAGES or report.message.startswith("separated"), report.message
     P, Q, M = state.loads.P, state.loads.Q, state.loads.M
     if not P > 0.0:
-        assert report.regime == Regime.SEPARATED
-        assert mem.X.size == 0 and math.isnan(state.contact_left) and math.isnan(state.contact_right)
+        assert report.regime == Regime.SEPARATED and mem.normal is None and mem.q.size == 0
+        assert all(math.isnan(v) for v in (state.contact_left, state.contact_right, state.stick_left,
+                                           state.stick_right))
         return None
     normal = mem.normal
-    assert (state.contact_left, state.contact_right) == (normal.left, normal.right)
-    for arr in (mem.X, mem.E, mem.kappa, mem.G):
-        assert np.all(np.isfinite(arr))
-    assert mem.X[0] == normal.left and mem.X[-1] == normal.right
+    L, R = normal.left, normal.right
+    W = R - L
+    assert (state.contact_left, state.contact_right) == (L, R)
+    h, n = mem.spacing, mem.q.size
+    for arr in (mem.q, mem.g, mem.G, mem.capacity):
+        assert arr.shape == (n,) and np.all(np.isfinite(arr))
+    assert mem.status.shape == (n,) and np.all(np.abs(mem.status) <= 1)
+    # the cells in contact are those whose centres lie inside the contact (one cell if none does)
+    centres = mem.x
+    if n > 1:
+        assert L < centres[0] and centres[-1] < R
+        assert centres[0] - h <= L and centres[-1] + h >= R
+    else:
+        assert centres[0] - h <= R and centres[0] + h >= L
+    assert np.all(mem.capacity >= 0.0)
+    assert h * float(np.sum(mem.capacity)) == pytest.approx(P, rel=CAPACITY_TOL)
+    fcap = F * float(np.max(mem.capacity))
+    assert np.all(np.abs(mem.q) <= F * mem.capacity + COULOMB_TOL * fcap)
+    status = mem.status
+    slipped = status != 0
+    # a cell that slipped carries its bound with the sign of its slip
+    assert np.all(np.abs(mem.q[slipped] - status[slipped] * F * mem.capacity[slipped]) <= 1e-12 * fcap)
     carried = max(-F * P, min(F * P, Q))
     if report.regime == Regime.GROSS_SLIDING:
         assert abs(Q) >= F * P and math.isnan(state.stick_left) and math.isnan(state.stick_right)
+        assert np.all(status == (1 if Q > 0 else -1))
+        assert report.message == (GROSS_SLIDING_MESSAGE if abs(Q) > F * P * (1 + 1e-12) else "")
     else:
         assert report.regime in (Regime.STICK, Regime.PARTIAL_SLIP)
-        assert normal.left <= state.stick_left <= state.stick_right <= normal.right
-    if report.regime == Regime.STICK:
-        assert mem.residual <= RESIDUAL_TOL
-    assert solver.shear_force(mem) == pytest.approx(carried, abs=FORCE_TOL * F * P)
+        assert L <= state.stick_left <= state.stick_right <= R
+        stuck = np.flatnonzero(status == 0)
+        assert stuck.size == n if report.regime == Regime.STICK else 0 < stuck.size < n
+        assert solver.stick_intervals(state) >= 1
+        if n > 1:  # the outermost stick points lie within a cell outside the outermost stuck cells' centres
+            assert centres[stuck[0]] - h <= state.stick_left <= centres[stuck[0]] + 1e-12 * W
+            assert centres[stuck[-1]] - 1e-12 * W <= state.stick_right <= centres[stuck[-1]] + h
+    force = solver.shear_force(mem)
+    assert force == pytest.approx(carried, abs=FORCE_TOL * F * P)
     x, w = contact_nodes(solver, mem)
     p, q = solver.tractions(mem, x)
     assert np.all(np.isfinite(p)) and np.all(np.isfinite(q)) and np.all(p >= 0.0)
-    W = normal.right - normal.left
-    assert float(w @ p) == pytest.approx(P, rel=P_TOL + normal_conditioning(solver.problem, normal))
-    assert float(w @ (p * x)) == pytest.approx(M, abs=(M_TOL + normal_conditioning(solver.problem, normal)) * P * W)
-    assert float(w @ q) == pytest.approx(carried, abs=Q_TOL * F * P)
+    cond = normal_conditioning(solver.problem, normal)
+    assert float(w @ p) == pytest.approx(P, rel=P_TOL + cond)
+    assert float(w @ (p * x)) == pytest.approx(M, abs=(M_TOL + cond) * P * (W + abs(normal.center)))
     excess = float(np.max(np.abs(q) - F * p)) / (F * float(np.max(p)))
     assert excess <= COULOMB_TOL, f"Coulomb excess {excess:.3g} of f max p"
+    assert float(w @ q) == pytest.approx(force, abs=(Q_TOL + cond) * F * P), (
+        f"int q - h sum q_j = {(float(w @ q) - force) / (F * P):.3g} f P; {capacity_report(solver, mem)}")
     return x, w, p, q
 
 
-def walk(solver, path, state=None, clean=True):
+def walk(solver, path, state=None):
     """Step through ``path`` (tuples of up to four loads), checking every step; return [(state, report)]."""
     state = solver.initial_state() if state is None else state
     return helpers.march(solver, path, state, t0=state.t,
-                         check=lambda prev, new, report: check_step(solver, prev, new, report, clean))
-
-
-def strain_on(memory, x):
-    """Locked-in strain E at x, interpolated as the solver does (square-root points included)."""
-    Xa, (Ea,) = points.augment(memory.X, memory.kind, memory.spacing, [(memory.E, memory.kappa)])
-    return np.interp(x, Xa, Ea)
+                         check=lambda prev, new, report: check_step(solver, prev, new, report))
 
 
 def edge_error(state, left, right):
     """Largest distance of the stick edges from (left, right), in contact widths."""
     W = state.contact_right - state.contact_left
     return max(abs(state.stick_left - left), abs(state.stick_right - right)) / W
+
+
+def assert_stick_zone(state, left, right, tol):
+    """The stick zone is [left, right] to ``tol`` contact widths: its outermost points, and every
+    cell whose centre is more than ``tol`` inside it stuck, every cell more than ``tol`` outside
+    it slipped (a closed form has one stick interval)."""
+    mem = state.memory
+    W = state.contact_right - state.contact_left
+    error = edge_error(state, left, right)
+    assert error <= tol, f"stick edges {error:.3g} of the width from ({left:.9g}, {right:.9g}), tolerance {tol:.3g}"
+    x = mem.x
+    inside = (x > left + tol * W) & (x < right - tol * W)
+    outside = (x < left - tol * W) | (x > right + tol * W)
+    assert np.all(mem.status[inside] == 0), f"{int(np.sum(mem.status[inside] != 0))} cells inside slipped"
+    assert np.all(mem.status[outside] != 0), f"{int(np.sum(mem.status[outside] == 0))} cells outside stuck"
+
+
+def l2_error(solver, memory, exact):
+    """sqrt(mean over the contact of (q - exact(x))^2) / (f max p): the L2 error of the output shear."""
+    x, w = contact_nodes(solver, memory)
+    p, q = solver.tractions(memory, x)
+    W = memory.normal.right - memory.normal.left
+    return math.sqrt(float(w @ (q - exact(x)) ** 2) / W) / (F * float(np.max(p)))
+
+
+def test_quadrature_integrates_the_pressure():
+    """The quadrature of the module docstring integrates p and p x to P_TOL and M_TOL: Hertz,
+    the punch with part of its flat lifted, and punch contacts whose edges are 1.8e-2 w,
+    1.8e-6 w and 3.9e-9 w beyond the ends of the flat (with the float rounding of those
+    edges, normal_conditioning); measured <= 5.3e-15 but for that rounding. The cell
+    integrals sum to the whole (1e-14)."""
+    for kind, loads in (("hertz", (P0, 0.0)), ("punch", (P0, 0.2 * P0 * W_FLAT)), ("punch", (1e3, 0.0)),
+                        ("punch", (1e-3, 0.0)), ("punch", (1e-7, 0.0))):
+        problem, solver = make(kind, 128)
+        state = solver.step(solver.initial_state(), 1.0, Loads(loads[0], 0.0, loads[1], 0.0))[0]
+        mem = state.memory
+        x, w = contact_nodes(solver, mem)
+        p = mem.normal.pressure(x)
+        cond = normal_conditioning(problem, mem.normal)
+        W = state.contact_right - state.contact_left
+        assert float(w @ p) == pytest.approx(loads[0], rel=P_TOL + cond)
+        assert float(w @ (p * x)) == pytest.approx(loads[1], abs=(M_TOL + cond) * loads[0] * W)
+        assert float(np.sum(cell_integrals(solver, mem))) == pytest.approx(float(w @ p), rel=1e-14)
+
+
+@pytest.mark.parametrize("kind,P", [("hertz", P0), ("hertz", 1e-3 * P0), ("punch", P0), ("punch", 1e-2 * P0),
+                                    ("punch", 1e-4 * P0)])
+@pytest.mark.parametrize("nodes", [128, 512])
+def test_capacity_is_the_mean_pressure_of_each_cell(kind, P, nodes):
+    """cap_j = (1/h) int p over cell j (GeneralMemory.capacity), which makes the output shear
+    q = (q_j / cap_j) p integrate to h sum q_j = Q. Tolerance 1e-11 of h max cap: the Hertz
+    cells are integrated by the solver's 4-point rule to <= 2.7e-12 (measured), the quadrature
+    here to ~1e-13.
+
+    Fails on the rounded punch (a solver defect, src/halfslip/solvers/general.py, _Load): the
+    4-point Gauss rule in theta does not see the x ln x kink of p at the ends of the flat
+    (x = +-w) inside a cell. Measured error of h cap in that cell, relative to h max cap:
+    7.6e-5 (P0), 7.6e-4 (1e-2 P0), 6.3e-2 (1e-4 P0, edge 8e-4 w from the flat's end) at 128
+    nodes; 8.9e-5, 4.7e-4, 7.9e-3 at 512; and int q - Q = 3e-7, 4e-6, 1e-4 f P at 128 nodes
+    (P = 0.5 f P, one step).
+    """
+    problem, solver = make(kind, nodes)
+    state = walk_unchecked(solver, [(P, 0.0), (P, 0.5 * F * P)])
+    mem = state.memory
+    err = (cell_integrals(solver, mem) - mem.spacing * mem.capacity) / (mem.spacing * float(np.max(mem.capacity)))
+    assert float(np.max(np.abs(err))) <= 1e-11, capacity_report(solver, mem)
+
+
+def walk_unchecked(solver, path):
+    """The last state of ``path`` (no invariants checked)."""
+    return helpers.states(solver, path)[-1]
 
 
 # =============================================================================
@@ -210,9 +352,17 @@ def rotation_matched_load(problem, P_stick, rotation, scale):
     return problem.solve(P_stick, M)
 
 
-def lift_and_shear(solver, problem):
+#: Jaeger-Ciavarella with a moment (lift_and_shear), per resolution: (stick edges in contact
+#: widths, L2 error of q in f max p). Measured at 128 / 256 / 512 / 1024 nodes (the contact
+#: spans 213 cells at 128): edges 9.2e-4 / 3.0e-4 / 1.7e-4 / 6.7e-5 (order ~1.2), q (L2)
+#: 4.3e-3 / 2.6e-3 / 1.3e-3 / 7.1e-4 (order ~0.9).
+JC_TOL = {128: (2e-3, 1e-2), 512: (5e-4, 3e-3)}
+
+
+def lift_and_shear(solver, problem, nodes):
     """P and M = 0.85 P w raised together, then Q to 0.2, 0.5, 0.8 f P (checked against the
     generalised Jaeger-Ciavarella construction), then Q reversed to -0.5 f P and back."""
+    edge_tol, q_tol = JC_TOL[nodes]
     w = W_FLAT
     M1 = 0.85 * P0 * w
     state = walk(solver, [(P0 * k / 4, 0.0, M1 * k / 4) for k in range(1, 5)])[-1][0]
@@ -221,14 +371,15 @@ def lift_and_shear(solver, problem):
     assert -0.8 * w < lifted.left < -0.7 * w and lifted.right > 1.6 * w  # flat partly lifted, corner loaded
     x = np.linspace(lifted.left, lifted.right, 1601)
     assert np.all(solver.tractions(state.memory, x)[1] == 0.0)  # no shear without Q and sigma
+    assert np.all(state.memory.q == 0.0)
     for ratio in (0.2, 0.5, 0.8):
         Q = ratio * F * P0
         state, report = walk(solver, [(P0, Q, M1)], state)[-1]
         assert report.regime == Regime.PARTIAL_SLIP
         stick = rotation_matched_load(problem, P0 - Q / F, lifted.rotation, P0 * w)
-        assert edge_error(state, stick.left, stick.right) < EXACT_EDGE_TOL
-        p, q = solver.tractions(state.memory, x)
-        assert np.max(np.abs(q - F * (p - stick.pressure(x)))) <= 1e-9 * F * p.max()
+        assert_stick_zone(state, stick.left, stick.right, edge_tol)
+        normal = state.memory.normal
+        assert l2_error(solver, state.memory, lambda x: F * (normal.pressure(x) - stick.pressure(x))) <= q_tol
     return walk(solver, [(P0, -0.5 * F * P0, M1), (P0, 0.5 * F * P0, M1)], state)[-1][0]
 
 
@@ -247,18 +398,17 @@ def test_moment_lifts_flat_then_shear(nodes, per_cycle):
     """A moment M = 0.85 P w moves the punch contact onto its right corner and lifts the
     left part of the flat (contact [-0.73 w, 1.62 w]); then Q is applied.
 
-    Contact edges equal NormalProblem.solve(P, M) exactly (same call). With E = 0 after
-    P and M raised together (q = 0), a monotone Q on a fixed (P, M) gives the Jaeger-
-    Ciavarella construction with the rigid rotation alpha held: q = f [p(x; P, M) -
-    p(x; P', M')] with P' = P - Q/f and M' such that the (P', M') contact has the same
-    rotation; the stick zone is that contact. E stays piecewise linear, so the solver is
-    exact (edges 1e-9 of the width, measured 4e-14; q 1e-9 of f max p, measured 6e-13).
-    Then two in-phase cycles of P (+-10%), Q, M and sigma about the lifted state: all
-    invariants, including the moment equilibrium int p x = M, at every step, and the flat
-    stays partly lifted.
+    Contact edges equal NormalProblem.solve(P, M) exactly (same call). With q = 0 after
+    P and M raised together, a monotone Q on a fixed (P, M) gives the Jaeger-Ciavarella
+    construction with the rigid rotation alpha held: q = f [p(x; P, M) - p(x; P', M')] with
+    P' = P - Q/f and M' such that the (P', M') contact has the same rotation; the stick zone
+    is that contact (edges and q to JC_TOL: first order in h, measured there). Then two
+    in-phase cycles of P (+-10%), Q, M and sigma about the lifted state: all invariants,
+    including the moment equilibrium int p x = M, at every step, and the flat stays partly
+    lifted.
     """
     problem, solver = make("punch", nodes)
-    state = lift_and_shear(solver, problem)
+    state = lift_and_shear(solver, problem, nodes)
     path = in_phase_about_lift(per_cycle, 2, 0.1)
     for (state, report), (P, _, M, _) in zip(walk(solver, path, state), path):
         normal = problem.solve(P, M)
@@ -267,31 +417,30 @@ def test_moment_lifts_flat_then_shear(nodes, per_cycle):
         assert report.regime == Regime.PARTIAL_SLIP
 
 
-@pytest.mark.skip(reason=(
-    "BUG (or the documented interior-slip limitation, met here in a smooth in-phase cycle): "
-    "with P amplitude 20% (P = 0.8 P0, Q = -0.5 f P, M = 0.8 P w, sigma = -2e7 at the load "
-    "minimum, phase 6/8) no slip configuration passes the checks: 'kept the closest (violation "
-    "20 x tolerance)', Coulomb excess 2.0e-2 of f max p, the same at 128 and 512 nodes and with "
-    "8, 16 or 32 steps/cycle (which then take 3, 16 and 32 s for two cycles)"))
 @pytest.mark.parametrize("nodes", [128, 512])
 def test_moment_lifted_flat_large_in_phase_cycle(nodes):
-    """As above with P +-20%: every step clean, all invariants."""
+    """As above with P +-20% (P = 0.8 P0, Q = -0.5 f P, M = 0.8 P w, sigma = -2e7 at the load
+    minimum): every step converged, all invariants. (The singular-integral solver found no
+    admissible configuration at the load minimum: its zones were attached to the edges;
+    the lattice solver has two stick intervals at that step.)"""
     problem, solver = make("punch", nodes)
-    state = lift_and_shear(solver, problem)
-    walk(solver, in_phase_about_lift(8, 2, 0.2), state)
+    state = lift_and_shear(solver, problem, nodes)
+    out = walk(solver, in_phase_about_lift(8, 2, 0.2), state)
+    assert all(report.regime == Regime.PARTIAL_SLIP for _, report in out)
+    assert all(state.contact_left > -W_FLAT for state, _ in out)
 
 
 def test_moment_at_constant_load_without_shear():
     """Raising M at constant P with Q = sigma = 0 leaves q = 0: full stick, nothing to solve.
 
-    (S1) fails at the receding edge, but the stuck solution is exact; before 1c1d1b7 the
-    step tried every slip configuration, fell back to 'kept full stick' with a failure
-    message and slipped=True, and was halved three times (16 normal solves, ~3 s).
+    (S1) fails at the receding edge, but the stuck solution is exact (q = 0 in every cell);
+    the step needs the normal solve of its end only (measured 1; the singular-integral
+    solver once fell back to 'kept full stick' after 16 normal solves).
     """
     problem, solver = make("punch", 64)
     state = walk(solver, [(P0, 0.0, 0.0)])[-1][0]
     before = dict(solver.counters)
-    state, report = walk(solver, [(P0, 0.0, 0.85 * P0 * W_FLAT)], state, clean=False)[-1]
+    state, report = walk(solver, [(P0, 0.0, 0.85 * P0 * W_FLAT)], state)[-1]
     x = np.linspace(state.contact_left, state.contact_right, 801)
     assert np.all(solver.tractions(state.memory, x)[1] == 0.0)
     assert report.regime == Regime.STICK
@@ -311,6 +460,13 @@ def moderate_tension_valid(a, b, e):
     return bool(np.all(np.sqrt(np.maximum(b * b - (x - e) ** 2, 0.0)) <= 2.0 * np.sqrt(a * a - x * x)))
 
 
+#: The moderate bulk-tension solution, per resolution: (stick edges in contact widths, L2
+#: error of q in f max p), over sigma/Q = 2000, 4000, 6000. Measured at 128 / 256 / 512 / 1024
+#: nodes: edges 4.7e-3 / 1.3e-3 / 7.7e-4 / 2.8e-4 (order ~1.3; 0.6 of a cell at 128), q (L2)
+#: 6.9e-3 / 3.7e-3 / 2.0e-3 / 1.0e-3 (order ~0.9).
+MODERATE_TOL = {128: (1e-2, 1.5e-2), 512: (2e-3, 5e-3)}
+
+
 @pytest.mark.parametrize("nodes,steps,sigma_over_Q", [
     (128, 10, 2000.0), (128, 10, 4000.0), (128, 10, 6000.0),
     pytest.param(512, 40, 2000.0, marks=pytest.mark.slow),
@@ -318,28 +474,29 @@ def moderate_tension_valid(a, b, e):
     pytest.param(512, 40, 6000.0, marks=pytest.mark.slow),
 ])
 def test_bulk_tension_moderate_closed_form(nodes, steps, sigma_over_Q):
-    """Q and sigma raised together at constant P on Hertz (E = 0 at the start).
+    """Q and sigma raised together at constant P on Hertz (q = 0 at the start).
 
     physics.md (N1, T1): with q = f p(x) - f p*(x - e), p* the Hertz pressure of half-width
     b = a sqrt(1 - Q/(fP)), the Hilbert transform on the stick zone is f e/(A R), which
     cancels A sigma/4 for e = -A R sigma/(4 f). Asserted up to sigma/Q = 6000 (e = -0.28 a,
     stick zone reaching 0.99 a), at every step where it applies: admissible (checked) and
-    no point of its stick zone slipped before (E = 0 there). At sigma/Q <= 4000 that is
-    every step; at 6000 the first steps reverse slip at the left end. Exact for the solver
-    (E piecewise linear): edges and q to 1e-9 (measured 7e-14)."""
+    no point of its stick zone slipped before. At sigma/Q <= 4000 that is every step; at
+    6000 the first steps reverse slip at the left end. Edges and q to MODERATE_TOL (first
+    order in h, measured there).
+    """
+    edge_tol, q_tol = MODERATE_TOL[nodes]
     problem, solver = make("hertz", nodes)
     a = float(problem.half_width(P0))
     path = [(P0, 0.0)] + [(P0, 0.5 * F * P0 * k / steps, 0.0, sigma_over_Q * 0.5 * F * P0 * k / steps)
                           for k in range(1, steps + 1)]
-    x = np.linspace(-a, a, 2001)
-    never_slipped = [-a, a]  # points inside have stuck at every step so far: E = 0 there
+    never_slipped = [-a, a]  # points inside have stuck at every step so far
     checked = 0
     for state, report in walk(solver, path)[1:]:
         Q, sigma = state.loads.Q, state.loads.sigma
         e = -A * R_HERTZ * sigma / (4 * F)
         b = a * math.sqrt(1 - Q / (F * P0))
         assert report.regime == Regime.PARTIAL_SLIP
-        # the closed form needs E = 0 on its stick zone and to be admissible; at sigma/Q = 6000
+        # the closed form needs a never-slipped stick zone and to be admissible; at sigma/Q = 6000
         # the first steps are not (b ~ a: the shifted zone would leave the contact; the solver
         # reverses slip at the left end instead), and later ones only once the stick zone
         # has moved off the points that slipped then
@@ -348,19 +505,23 @@ def test_bulk_tension_moderate_closed_form(nodes, steps, sigma_over_Q):
         if not applies:
             continue
         checked += 1
-        assert edge_error(state, e - b, e + b) < EXACT_EDGE_TOL
-        p, q = solver.tractions(state.memory, x)
-        shifted = np.sqrt(np.maximum(b * b - (x - e) ** 2, 0.0)) / (A * R_HERTZ)
-        assert np.max(np.abs(q - F * (p - shifted))) <= 1e-9 * F * p.max()
+        assert_stick_zone(state, e - b, e + b, edge_tol)
+
+        def exact(x, b=b, e=e):
+            return F * (np.sqrt(np.maximum(a * a - x * x, 0.0)) - np.sqrt(np.maximum(b * b - (x - e) ** 2, 0.0))) / (
+                A * R_HERTZ)
+
+        assert l2_error(solver, state.memory, exact) <= q_tol
     assert checked >= (steps if sigma_over_Q < 5000 else 1)
 
 
 @pytest.mark.parametrize("nodes", [128, pytest.param(512, marks=pytest.mark.slow)])
 def test_bulk_tension_reverses_slip_at_one_end(nodes):
     """sigma = 2e4 Q (6e8 Pa at Q = 0.5 f P): the moderate solution is not admissible
-    (stick zone would leave the contact), slip reverses at the left end: q = -f p there,
-    +f p at the right end (by construction of the zones: 1e-12), opposite-sign zones at
-    every step, and all invariants."""
+    (stick zone would leave the contact), slip reverses at the left end: every cell left of
+    the stick zone slipped backward (q = -f p there), every cell right of it forward
+    (q = +f p), one stick interval, at every step, and all invariants. The slipping cells
+    carry their bound exactly: q = +-f p to rounding (measured 2e-16 of f max p)."""
     problem, solver = make("hertz", nodes)
     a = float(problem.half_width(P0))
     steps = 10
@@ -368,12 +529,17 @@ def test_bulk_tension_reverses_slip_at_one_end(nodes):
                           for k in range(1, steps + 1)]
     for state, report in walk(solver, path)[1:]:
         assert report.regime == Regime.PARTIAL_SLIP
-        assert state.memory.shear.config.left == -1 and state.memory.shear.config.right == 1
+        mem = state.memory
         e = -A * R_HERTZ * state.loads.sigma / (4 * F)
         assert not moderate_tension_valid(a, a * math.sqrt(1 - state.loads.Q / (F * P0)), e)
+        stuck = np.flatnonzero(mem.status == 0)
+        assert solver.stick_intervals(state) == 1
+        assert stuck[0] > 0 and stuck[-1] < mem.q.size - 1
+        assert np.all(mem.status[:stuck[0]] == -1) and np.all(mem.status[stuck[-1] + 1:] == 1)
         x = np.linspace(state.contact_left, state.contact_right, 4001)[1:-1]
-        p, q = solver.tractions(state.memory, x)
-        left, right = x < state.stick_left, x > state.stick_right
+        p, q = solver.tractions(mem, x)
+        cell = np.clip(np.floor(x / mem.spacing).astype(np.int64) - mem.first, 0, mem.q.size - 1)
+        left, right = cell < stuck[0], cell > stuck[-1]
         assert left.any() and right.any()
         assert np.allclose(q[left], -F * p[left], rtol=1e-12, atol=1e-12 * F * p.max())
         assert np.allclose(q[right], F * p[right], rtol=1e-12, atol=1e-12 * F * p.max())
@@ -387,29 +553,34 @@ def tension_alone(u):
                                           pytest.param(1024, 12, marks=pytest.mark.slow)])
 def test_tension_alone_cycled_stick_zone_centred(nodes, cycles):
     """Constant P, Q = 0, sigma cycled (+-1e8 Pa) on Hertz: the problem is antisymmetric, so
-    at every step the slip zones have opposite signs, the stick zone is centred and
+    at every slipping step the slip zones have opposite signs, the stick zone is centred and
     q(-x) = -q(x); and the cycle repeats.
 
-    Tolerances: the lattice is symmetric about the contact centre; the stick zone may be
-    off-centre only through the order in which the two edges' points are laid and merged,
-    far below the edge accuracy (3e-4 of the width at 64 nodes): 1e-5 of the width
-    (measured 2.2e-6 at 64, 1.5e-7 at 128). |q(x) + q(-x)| <= 2 max |q - q_exact|: the
-    pointwise error of q next to the stick edges is 8.5e-3 (64) and 3.8e-3 (128) of f max p
-    against 1024 nodes, so 1e-2 (measured 5.9e-3 and 4e-4). After the 10th cycle the state
-    repeats (edges, E and q to 1e-4, as in the many-cycles tests below).
+    The lattice is symmetric about the contact centre (x_j = (j + 1/2) h, contact [-a, a])
+    and the step's problem has a unique solution, so the symmetry holds to rounding: stick
+    pattern mirrored exactly, q_j + q_(n-1-j) to 1e-12 of f max p (measured 4e-15 / 1e-14 /
+    2e-14 at 64 / 128 / 256 nodes), centre of the stick zone to 1e-12 of the width (measured
+    8e-16). The first step after each extreme of sigma (sin 0.92: sigma back by 7.6% of its
+    amplitude) opens reversed slip zones narrower than the end cell at 64 and 128 nodes;
+    the lattice keeps them stuck (measured: exactly those two steps per cycle are STICK at
+    64 and 128 nodes, none at 256). After the 10th cycle the state repeats
+    (assert_same_cycle).
     """
     problem, solver = make("hertz", nodes)
-    a = float(problem.half_width(P0))
+    per_cycle = 16
     state = walk(solver, [(P0, 0.0)])[-1][0]
-    kept = cycle(solver, state, tension_alone, 16, cycles, keep=range(cycles), full_check=(0, cycles - 1))
-    x = np.linspace(-a, a, 801)
+    kept = cycle(solver, state, tension_alone, per_cycle, cycles, keep=range(cycles), full_check=(0, cycles - 1))
+    first_after_extreme = (per_cycle // 4, 3 * per_cycle // 4)  # k = 5, 13: states[4], states[12]
     for states in kept.values():
-        for state in states:
-            cfg = state.memory.shear.config
-            assert cfg.left == -cfg.right != 0
-            assert abs(state.stick_left + state.stick_right) / 2 <= 1e-5 * 2 * a
-            p, q = solver.tractions(state.memory, x)
-            assert np.max(np.abs(q + q[::-1])) <= 1e-2 * F * p.max()
+        for k, state in enumerate(states):
+            mem = state.memory
+            assert np.array_equal(mem.status, -mem.status[::-1]) and mem.x[0] == -mem.x[-1]
+            assert np.max(np.abs(mem.q + mem.q[::-1])) <= 1e-12 * F * float(np.max(mem.capacity))
+            assert abs(state.stick_left + state.stick_right) / 2 <= 1e-12 * (state.contact_right - state.contact_left)
+            if np.all(mem.status == 0):
+                assert nodes <= 128 and k in first_after_extreme
+            else:
+                assert mem.status[0] == -mem.status[-1] != 0
     assert_same_cycle(solver, kept[9], kept[cycles - 1])
 
 
@@ -417,23 +588,46 @@ def test_tension_alone_cycled_stick_zone_centred(nodes, cycles):
 # 3. extreme loads and scales: dimensional analysis
 # =============================================================================
 # Scaling law of the formulation. Lengths x l, loads P, Q x s, M x s l, sigma x s / l and the
-# compliance A x l / s leave (N1)-(N3), (T1) and (T2) invariant: p, q scale as s / l, the strain
-# E is unchanged, slips as l, dissipation as s l. For Hertz the only length of the normal
-# problem is a = sqrt(2 A R P / pi), so A can stay fixed: every (R, P) is similar, p0 = a/(A R),
-# and the dissipation scales as A (f P)^2 (energy = load x slip, slip ~ A p0 a).
+# compliance A x l / s leave (N1)-(N3), (T1) and (T2) invariant: p, q scale as s / l, slips
+# as l, dissipation as s l. For Hertz the only length of the normal problem is
+# a = sqrt(2 A R P / pi), so A can stay fixed: every (R, P) is similar, p0 = a/(A R), and the
+# dissipation scales as A (f P)^2 (energy = load x slip, slip ~ A p0 a). The lattice scales
+# with the first contact (h = its width / nodes), so the cells are similar too and the
+# comparisons are made cell by cell (q at the cell centres: sampling q at fixed points
+# would meet the cell boundaries, where q jumps, and the side a point falls on is rounding).
 LENGTHS = [1e-6, 1.0, 1e3]  # Hertz radius R = 50 mm x this: 50 nm, 50 mm, 50 m
 LOADS = [1e-6, 1e5, 1e9]  # P [N/m]
+#: Dimensionless q_j / p_scale, relative to f max, and dissipation / energy scale, relative,
+#: at another scale than the reference: the inputs differ by rounding only, and the
+#: step's problem is solved to rounding. Measured <= 2.1e-12 (q) and <= 4.1e-10 (dissipation:
+#: cells near a stick edge whose slip increment is at rounding level).
+SCALE_Q_TOL = 1e-11
+SCALE_ENERGY_TOL = 2e-9
+#: Stick edges / a at another scale (measured <= 1.3e-13).
+SCALE_EDGE_TOL = 5e-13
 
 
 def hertz_exact_history(P, a):
     """P and M = 0.3 a P raised together, then Q and sigma together (dimensionless shift)."""
     x0 = 0.3 * a
-    # (not P/4 .. P: a would double exactly, and W/h = 2 nodes, the lattice's refinement
-    # threshold, would be met to rounding; which side it falls on changes the resolution)
     path = [(P * u, 0.0, x0 * P * u, 0.0) for u in (0.3, 0.55, 0.8, 1.0)]
     p0 = 2 * P / (math.pi * a)
     path += [(P, 0.5 * F * P * k / 4, x0 * P, 0.4 * F * p0 * k / 4) for k in range(1, 5)]
     return x0, path
+
+
+def assert_similar_cells(state, ref, x_scale, x_ref, p_scale, p_ref):
+    """Same lattice cells in dimensionless form and q_j / p_scale equal to SCALE_Q_TOL."""
+    mem, mref = state.memory, ref.memory
+    assert (mem.first, mem.q.size) == (mref.first, mref.q.size)
+    assert np.allclose(mem.x / x_scale, mref.x / x_ref, rtol=0.0, atol=1e-14)
+    q, q_ref = mem.q / p_scale, mref.q / p_ref
+    assert np.max(np.abs(q - q_ref)) <= SCALE_Q_TOL * F * np.max(mref.capacity / p_ref)
+
+
+#: Cattaneo with bulk tension about x0 = M/P on Hertz at 128 nodes (edges in contact widths).
+#: Measured 7.5e-4 / 3.6e-4 / 1.7e-4 / 8.9e-5 at 128 / 256 / 512 / 1024 nodes: order 1.0.
+HERTZ_SHIFT_EDGE_TOL = 2e-3
 
 
 @pytest.mark.parametrize("length", LENGTHS)
@@ -441,11 +635,10 @@ def hertz_exact_history(P, a):
 def test_scaling_hertz_exact(length, load):
     """Hertz at R from 50 nm to 50 m and P from 1e-6 to 1e9 N/m: a = sqrt(2 A R P / pi)
     (1e-12), and the closed form of a Cattaneo shear with bulk tension about the contact
-    centre x0 = M/P (stick zone x0 - A R sigma/(4f) +- a sqrt(1 - Q/fP)) holds to 1e-9 of
-    the width at every step of every scale (E piecewise linear: exact; the solver's
-    tolerances are all relative, so nothing may depend on the scale). q / p0 on x / a is
-    the same at every scale to 1e-6 and the dissipation / (A (f P)^2) to 1e-7 (rounding; see
-    test_scaling_general_history for these bounds; measured 1e-12 and 1e-10)."""
+    centre x0 = M/P (stick zone x0 - A R sigma/(4f) +- a sqrt(1 - Q/fP)) holds at every step
+    of every scale (HERTZ_SHIFT_EDGE_TOL: first order in h). q_j / p0 on the cells and the
+    dissipation / (A (f P)^2) are the same at every scale (SCALE_Q_TOL, SCALE_ENERGY_TOL:
+    rounding; measured 1.5e-12 and 5.8e-13 here)."""
     R = R_HERTZ * length
     problem = hertz_problem(R)
     solver = GeneralSolver(problem, F, 128)
@@ -457,31 +650,31 @@ def test_scaling_hertz_exact(length, load):
         assert state.contact_left == pytest.approx(x0 - a, rel=1e-12, abs=1e-12 * a)
         e = x0 - A * R * state.loads.sigma / (4 * F)
         b = a * math.sqrt(1 - state.loads.Q / (F * load))
-        assert edge_error(state, e - b, e + b) < EXACT_EDGE_TOL
+        assert_stick_zone(state, e - b, e + b, HERTZ_SHIFT_EDGE_TOL)
     ref_problem = hertz_problem()
     ref = GeneralSolver(ref_problem, F, 128)
     a_ref = float(ref_problem.half_width(P0))
     ref_out = walk(ref, hertz_exact_history(P0, a_ref)[1])
-    u = np.linspace(-0.7, 1.3, 401)[1:-1]  # inside: q ~ sqrt at the edges, which sit at -0.7 a to rounding
-    q = solver.tractions(out[-1][0].memory, u * a)[1] / (load / a)
-    q_ref = ref.tractions(ref_out[-1][0].memory, u * a_ref)[1] / (P0 / a_ref)
-    assert np.max(np.abs(q - q_ref)) <= 1e-6 * np.max(np.abs(q_ref))
+    assert_similar_cells(out[-1][0], ref_out[-1][0], a, a_ref, load / a, P0 / a_ref)
     for (s, _), (r, _) in zip(out[4:], ref_out[4:]):
         assert s.dissipation / (A * (F * load) ** 2) == pytest.approx(r.dissipation / (A * (F * P0) ** 2),
-                                                                      rel=1e-7, abs=1e-15)
+                                                                      rel=SCALE_ENERGY_TOL, abs=1e-15)
 
 
 PUNCH_LENGTHS = [5e-6, 1.0, 5e3]  # flat half-width 0.2 mm x this: 1 nm .. 0.2 mm .. 1 m
+#: J1 on the rounded punch at 128 nodes (contact widths). Measured 4.0e-4 / 6.0e-4 / 1.9e-4 /
+#: 1.8e-4 at 128 / 256 / 512 / 1024 nodes: order ~0.5 (the edges fall at different places
+#: within their cells), always below a quarter of a cell.
+PUNCH_J1_EDGE_TOL = 1e-3
 
 
 @pytest.mark.parametrize("length", PUNCH_LENGTHS)
 @pytest.mark.parametrize("load", [1e-6, 1e5, 1e9])
 def test_scaling_punch_exact(length, load):
     """Rounded punch with w and R scaled by l (w from 1 nm to 1 m), P by s = P / 1e5 N/m,
-    A by l / s (the similar geometry: a / w fixed). J1 at every step (b = a(P - Q/f), exact:
-    1e-9 of the width), the contact a = l a_ref (1e-12), and q / (s/l) on x / l identical to
-    the reference scale to 1e-6 of its maximum (rounding, as in test_scaling_general_history;
-    measured 1e-12)."""
+    A by l / s (the similar geometry: a / w fixed). J1 at every step (b = a(P - Q/f),
+    PUNCH_J1_EDGE_TOL), the contact a = l a_ref (1e-12), and q_j / (s/l) on the cells
+    identical to the reference scale (SCALE_Q_TOL; measured 3e-13)."""
     s = load / P0
     problem = punch_problem(W_FLAT * length, R_CORNER * length, A * length / s)
     solver = GeneralSolver(problem, F, 128)
@@ -491,13 +684,10 @@ def test_scaling_punch_exact(length, load):
     assert float(problem.half_width(load)) == pytest.approx(length * float(ref_problem.half_width(P0)), rel=1e-12)
     for state, _ in out[1:]:
         b = float(problem.half_width(load - state.loads.Q / F))
-        assert edge_error(state, -b, b) < EXACT_EDGE_TOL
+        assert_stick_zone(state, -b, b, PUNCH_J1_EDGE_TOL)
     ref = GeneralSolver(ref_problem, F, 128)
     ref_out = walk(ref, [(P0, Q / s) for P, Q in path])
-    u = np.linspace(-1.4, 1.4, 561) * W_FLAT
-    q = solver.tractions(out[-1][0].memory, u * length)[1] * (length / s)
-    q_ref = ref.tractions(ref_out[-1][0].memory, u)[1]
-    assert np.max(np.abs(q - q_ref)) <= 1e-6 * np.max(np.abs(q_ref))
+    assert_similar_cells(out[-1][0], ref_out[-1][0], length, 1.0, s / length, 1.0)
 
 
 def general_history(P, a, p_scale):
@@ -508,30 +698,20 @@ def general_history(P, a, p_scale):
 
 
 def run_general_scaled(kind, length, load):
-    """The general history at a scale; dimensionless edges, q and dissipation at every step."""
+    """The general history at a scale; dimensionless edges, cells and dissipation at every step."""
     if kind == "hertz":
         R = R_HERTZ * length
         problem = hertz_problem(R)
         a = float(problem.half_width(load))
-        p_scale, x_scale, energy = a / (A * R), a, A * (F * load) ** 2
+        p_scale, energy = a / (A * R), A * (F * load) ** 2
     else:
         s = load / P0
         problem = punch_problem(W_FLAT * length, R_CORNER * length, A * length / s)
         a = float(problem.half_width(load))
-        p_scale, x_scale, energy = load / a, length, s * length
+        p_scale, energy = load / a, s * length
     solver = GeneralSolver(problem, F, 128)
     out = walk(solver, general_history(load, a, p_scale))
-    u = np.linspace(-1.0, 1.0, 401) * a / x_scale
-    return [((st.stick_left / a, st.stick_right / a),
-             solver.tractions(st.memory, u * x_scale)[1] / p_scale,
-             st.dissipation / energy) for st, _ in out]
-
-
-def assert_same_dimensionless(results, reference, edge_tol, q_tol, energy_tol):
-    for (edges, q, d), (edges_ref, q_ref, d_ref) in zip(results, reference):
-        assert max(abs(edges[0] - edges_ref[0]), abs(edges[1] - edges_ref[1])) <= edge_tol
-        assert np.max(np.abs(q - q_ref)) <= q_tol * F * np.max(np.abs(q_ref))
-        assert d == pytest.approx(d_ref, rel=energy_tol, abs=1e-300)
+    return [((st.stick_left / a, st.stick_right / a), st, a, p_scale, st.dissipation / energy) for st, _ in out]
 
 
 SCALES = [(length, load) for length in (1e-6, 1e3) for load in (1e-6, 1e9)]
@@ -543,13 +723,15 @@ def test_scaling_general_history(kind, length, load):
     """The general history (P, Q, M, sigma varying, two reversals) at extreme scales (lengths
     x 1e-6 and x 1e3, P = 1e-6 and 1e9 N/m) equals the reference scale in dimensionless form
     to rounding: every tolerance of the solver is relative, so only the rounding of the
-    rescaled inputs differs. Stick edges / a to 1e-9 (measured 5e-13; a 1e-15 change of P
-    at the reference scale moves them by 2e-13); q / p_scale to 1e-6 of its maximum: q* rises
-    like sqrt(distance) from a stick edge, so an edge moved by 1e-13 of the width changes q at
-    a grid point next to it by up to ~sqrt(1e-13) (measured 5e-9; 3.6e-8 for P x (1 + 1e-15));
-    dissipation to 1e-7 (measured 1.2e-8)."""
+    rescaled inputs differs. Stick edges / a to SCALE_EDGE_TOL, q_j / p_scale on the same
+    cells to SCALE_Q_TOL, dissipation to SCALE_ENERGY_TOL (measured 1.3e-13, 2.1e-12,
+    4.1e-10)."""
     reference = run_general_scaled(kind, 1.0, P0)
-    assert_same_dimensionless(run_general_scaled(kind, length, load), reference, 1e-9, 1e-6, 1e-7)
+    for (edges, state, a, p_scale, d), (edges_ref, ref, a_ref, p_ref, d_ref) in zip(
+            run_general_scaled(kind, length, load), reference):
+        assert max(abs(edges[0] - edges_ref[0]), abs(edges[1] - edges_ref[1])) <= SCALE_EDGE_TOL
+        assert_similar_cells(state, ref, a, a_ref, p_scale, p_ref)
+        assert d == pytest.approx(d_ref, rel=SCALE_ENERGY_TOL, abs=1e-300)
 
 
 # =============================================================================
@@ -564,6 +746,8 @@ SPLITS = {
     "tiny_mid": [0.5, 0.5 + 1e-9, 1.0],
     "tiny_2e-9": [2e-9, 1.0],
 }
+
+
 def split_path(corners, fractions, start=(0.0, 0.0, 0.0, 0.0)):
     path = []
     for end in corners:
@@ -572,84 +756,73 @@ def split_path(corners, fractions, start=(0.0, 0.0, 0.0, 0.0)):
     return path
 
 
-TINY_ZONE = (
-    "BUG: a slip zone narrower than 1e-9 of the width (CM step of 1e-9 of the ramp) is reported "
-    "STICK and gets no singular point, but the contact-edge points keep the slipped strain; the "
-    "next step interpolates it linearly over a whole lattice cell, so the stick edges of the "
-    "next CM step are off by up to 2e-6 a at 128 nodes (1e-6 a at 512; Hertz Q = 7e-6 f P after "
-    "7e-10 f P: a - b = 1.95e-6 a instead of 3.5e-9 a, a slip zone 560x too wide; punch: 1.1e-6 a)")
-
-
-MIS_TRIM = (
-    "BUG: a step that continues a slip by a tiny amount (here 1e-9 of the segment) is reported "
-    "as STICK with stick edges = contact edges (Hertz: 0.226 of the width off b = a sqrt(0.3); "
-    "punch: 0.071): GeneralSolver._slip_update counts as stuck every slip-zone point whose strain "
-    "changes by less than TRIM_TOL = 1e-3 of max abs(E), a threshold that does not scale with "
-    "the step, so the whole slip zone is 'trimmed' and the stick edge moves to the contact edge "
-    "(q itself stays right). Measuring against the step's own change fixes this but broke the "
-    "periodicity of the in-phase shear-and-tension and dovetail cycles below (4dc6199, reverted)")
-
-
-def splits_param(name):
-    if name == "graded":
-        return pytest.param(name, marks=pytest.mark.skip(reason=TINY_ZONE))
-    if name in ("tiny_last", "tiny_mid"):
-        return pytest.param(name, marks=pytest.mark.skip(reason=MIS_TRIM))
-    return name
+#: J1 along a Cattaneo-Mindlin ramp at 128 nodes, every split (contact widths). Measured max
+#: over the splits 1.5e-3 (Hertz) and 2.9e-3 (punch; 0.37 of a cell: the first of 20 equal
+#: steps, Q = 0.035 f P, opens slip zones narrower than the end cell, which the lattice keeps
+#: stuck) at 128 nodes; 6.9e-4 / 9.6e-4 at 256, 2.5e-4 / 3.7e-4 at 512: order ~1.4.
+SPLIT_J1_EDGE_TOL = 6e-3
 
 
 @pytest.mark.parametrize("kind", ["hertz", "punch"])
-@pytest.mark.parametrize("split", [splits_param(name) for name in SPLITS])
+@pytest.mark.parametrize("split", list(SPLITS))
 def test_step_splitting_from_rest(kind, split):
     """A Cattaneo-Mindlin ramp of Q at constant P, and a straight in-phase segment of P, Q, M
     and sigma from the loaded, unsheared state, each taken as one step or split (20 equal
     steps, a step of 1e-9 first or last or in the middle, a graded sequence 1e-9, 1e-6,
     1e-3, 0.1, 1): invariants at every step; the CM stick zone is J1, b = a(P - Q/f), at
-    every step (exact: 1e-9 of the width); the segment ends where the single step does
-    (E = 0 at its start and zones monotone along a straight line: 1e-9, measured 1e-13).
-    Before 4dc6199 a tiny step continuing a slip (tiny_last, tiny_mid) was reported as STICK
-    with the stick edges at the contact edges (0.23 of the width off for Hertz)."""
+    every step (SPLIT_J1_EDGE_TOL); the segment ends where the single step does: q = 0 at its
+    start and the zones grow monotonically along a straight line, so the cells stuck at the
+    end never slipped and keep the displacement they locked at P0; the end state's problem
+    is then the same whatever the split (edges to 1e-12 of the width and q_j to 1e-12 of
+    f max p; measured 0). The singular-integral solver reported a tiny step continuing a
+    slip (tiny_last, tiny_mid) as STICK with the stick edges at the contact edges, and
+    mis-placed the edges after a slip zone narrower than 1e-9 of the width (graded)."""
     problem, solver = make(kind, 128)
     a = float(problem.half_width(P0))
     fractions = SPLITS[split]
     loaded = walk(solver, [(P0, 0.0)])[-1][0]
     for state, _ in walk(solver, split_path([(P0, 0.7 * F * P0)], fractions, (P0, 0.0)), loaded):
         b = float(problem.half_width(P0 - state.loads.Q / F))
-        assert edge_error(state, -b, b) < EXACT_EDGE_TOL
+        assert_stick_zone(state, -b, b, SPLIT_J1_EDGE_TOL)
     end = (1.3 * P0, 0.6 * F * 1.3 * P0, 0.15 * a * P0, 3e7)
     single = walk(solver, [end], loaded)[-1][0]
     state = walk(solver, split_path([end], fractions, (P0, 0.0, 0.0, 0.0)), loaded)[-1][0]
-    assert edge_error(state, single.stick_left, single.stick_right) < EXACT_EDGE_TOL
+    assert edge_error(state, single.stick_left, single.stick_right) <= 1e-12
+    assert (state.memory.first, state.memory.q.size) == (single.memory.first, single.memory.q.size)
+    assert np.max(np.abs(state.memory.q - single.memory.q)) <= 1e-12 * F * float(np.max(single.memory.capacity))
 
 
-AFTER_SLIP_BUG = (
-    "BUG: small steps after a Cattaneo slip (P0, Q = 0.7 f P0) towards (1.3 P0, 0.2 f P0, "
-    "0.1 a P0, 2e7) mis-solve the growing contact (128 nodes; HEAD 80484a2). A first step of "
-    "lam = 2e-9 of the segment: 'kept the closest (violation ... x tolerance)'; towards "
-    "(1.3 P0, 0.2 f P0, 0, 0) the punch returns config (-1, 0) as STICK without any message, "
-    "Coulomb excess 2.1 of f max p, int q - Q = -3.4e-5 f P, and Hertz (with the message) q up "
-    "to 8.6 f p within 1e-6 a of the edges, the stick data jumping at the new edge. lam in "
-    "[1e-8, 1e-4]: 'no slip-zone configuration converged; kept full stick'; the graded sequence "
-    "1e-9, 1e-6, 1e-3, 0.1 then carries Coulomb excesses of 18-31 f max p to the end of the "
-    "segment (lam = 1e-9 first is fine). Punch, 128 and 512 nodes, first step lam = 0.01: "
-    "unreported Coulomb excess 1.3e-2 in the arrival strip at the stuck advancing right edge "
-    "(x = 1.0003 a), 5.5e-3 at lam = 0.02; lam = 0.05 (20 equal steps): 'kept the closest "
-    "(violation 8 x tolerance)'. 512 nodes, 100 equal steps: the unreported excess in that strip "
-    "reaches 1.35e-2 (punch) and grows over steps 88-97 to 1.05e-3 (Hertz, x = 1.19-1.21 a)")
+#: One step (sub-stepped by the solver where the contact or a stick edge travels) against
+#: equal steps, after a Cattaneo slip (contact widths), set from the rounded punch, which has one
+#: stick interval throughout: measured 1.4e-6 / 2.7e-6 / 5.5e-6 (10 / 20 / 100 steps) at 128
+#: nodes, 1.6e-6 / 2.1e-6 / 9.0e-6 at 256, 2.0e-7 / 2.4e-9 / 3.1e-6 at 512: the time
+#: discretisation of the arrivals; the edges stay in their cells.
+AFTER_SLIP_EDGE_TOL = 1e-5
 
 
 @pytest.mark.parametrize("kind,nodes,steps", [
     ("hertz", 128, 10),
     ("punch", 128, 10),
-    pytest.param("punch", 128, 20, marks=pytest.mark.skip(reason=AFTER_SLIP_BUG)),
-    pytest.param("hertz", 512, 100, marks=[pytest.mark.slow, pytest.mark.skip(reason=AFTER_SLIP_BUG)]),
-    pytest.param("punch", 512, 100, marks=[pytest.mark.slow, pytest.mark.skip(reason=AFTER_SLIP_BUG)]),
+    ("punch", 128, 20),
+    pytest.param("hertz", 512, 100, marks=pytest.mark.slow),
+    pytest.param("punch", 512, 100, marks=pytest.mark.slow),
 ])
 def test_step_splitting_after_slip(kind, nodes, steps):
     """The in-phase segment taken after a Cattaneo slip, as one step and as `steps` equal
-    steps: invariants at every step; the stick edges agree to 1e-4 of the width (the
-    solver's discretisation tolerance: the step reverses slip at both ends, and the one-
-    step arrival strains are first order in the step; measured <= 3e-5)."""
+    steps: invariants at every step (every step converged: the singular-integral solver
+    failed here, 'kept the closest', or passed unreported Coulomb excesses of 1.3e-2 in the
+    arrival strip at the advancing edge); the outermost stick points agree to
+    AFTER_SLIP_EDGE_TOL.
+
+    Fails for Hertz: the segment reverses slip at the right end while the right edge
+    advances, and stick islands of one to four cells appear beyond the main stick zone or at
+    the contact edge, differently for every split: outermost stick points 3.7e-2 of the
+    width apart at 128 nodes (10 steps: 4 stick intervals, single step: 2), 1.1e-2 at 512
+    nodes and 100 steps (stick_right 1.135 a after 100 steps, 1.110 a after one; with 200
+    and 400 steps the contact's end cell sticks, stick_right = 1.217 a, the contact edge),
+    while the widest stick intervals agree to 5.4e-3 and 6.7e-4 of the width and q to
+    1.8e-3 and 1.4e-3 of f max p in L2 (1.4e-2 in the worst cell).
+    """
     problem, solver = make(kind, nodes)
     a = float(problem.half_width(P0))
     slipped = walk(solver, [(P0, 0.0), (P0, 0.7 * F * P0)])[-1][0]
@@ -657,55 +830,71 @@ def test_step_splitting_after_slip(kind, nodes, steps):
     single = walk(solver, [end], slipped)[-1][0]
     fractions = list(np.arange(1, steps + 1) / steps)
     state = walk(solver, split_path([end], fractions, (P0, 0.7 * F * P0, 0.0, 0.0)), slipped)[-1][0]
-    assert edge_error(state, single.stick_left, single.stick_right) < 1e-4
+    assert edge_error(state, single.stick_left, single.stick_right) <= AFTER_SLIP_EDGE_TOL
+
+
+#: A tiny first step (or the graded sequence) after a Cattaneo slip against the single step,
+#: at 128 nodes (contact widths), set from the rounded punch: measured tiny_first 2.8e-7,
+#: tiny_2e-9 2.8e-7, graded 5.3e-7 (1.5e-7 .. 1.0e-6 at 256, 3.3e-7 .. 3.6e-7 at 512): the
+#: sub-steps of the remaining step differ from those of the single step.
+TINY_AFTER_SLIP_TOL = 1e-6
 
 
 @pytest.mark.parametrize("kind", ["hertz", "punch"])
-@pytest.mark.parametrize("split", [
-    "tiny_first",
-    pytest.param("tiny_2e-9", marks=pytest.mark.skip(reason=AFTER_SLIP_BUG)),
-    pytest.param("graded", marks=pytest.mark.skip(reason=AFTER_SLIP_BUG)),
-])
+@pytest.mark.parametrize("split", ["tiny_first", "tiny_2e-9", "graded"])
 def test_tiny_steps_after_slip(kind, split):
     """As above with a first step of 1e-9 or 2e-9 of the segment (or the graded sequence 1e-9,
-    1e-6, 1e-3, 0.1, 1): invariants at every step and the same end state as the single step
-    (1e-4 of the width; measured 2e-7 after a first step of 1e-9)."""
+    1e-6, 1e-3, 0.1, 1): invariants at every step (the singular-integral solver returned
+    Coulomb excesses of 2-31 f max p after 2e-9), and the same end state as the single
+    step (TINY_AFTER_SLIP_TOL).
+
+    Fails for Hertz, as test_step_splitting_after_slip: outermost stick points 2.8e-6
+    (tiny_first, tiny_2e-9) and 4.3e-6 (graded) of the width apart at 128 nodes, and the
+    widest stick intervals 6.4e-3 apart (two stick intervals in both states).
+    """
     problem, solver = make(kind, 128)
     a = float(problem.half_width(P0))
     slipped = walk(solver, [(P0, 0.0), (P0, 0.7 * F * P0)])[-1][0]
     end = (1.3 * P0, 0.2 * F * P0, 0.1 * a * P0, 2e7)
     single = walk(solver, [end], slipped)[-1][0]
     state = walk(solver, split_path([end], SPLITS[split], (P0, 0.7 * F * P0, 0.0, 0.0)), slipped)[-1][0]
-    assert edge_error(state, single.stick_left, single.stick_right) < 1e-4
+    assert edge_error(state, single.stick_left, single.stick_right) <= TINY_AFTER_SLIP_TOL
 
 
 # =============================================================================
 # 5. stick zone shrinking to nothing, gross sliding, separation, tiny loads
 # =============================================================================
-def j1_edge_tol(problem, P_stick, W):
-    """Tolerance on b = a(P - Q/f) near Q = f P: Newton stops at 1e-12 of f P in the force
-    and the stick zone carries f (P - Q/f), so the edge is fixed only to
-    ~1e-12 P da/dP (10x margin; Hertz: a/(2 P_stick), punch: (2/3)(a - w)/P_stick);
-    1e-9 of the width otherwise."""
-    dP = 1e-4 * P_stick
-    slope = float(problem.half_width(P_stick + dP) - problem.half_width(P_stick - dP)) / (2 * dP)
-    return EXACT_EDGE_TOL * W + 1e-11 * P0 * abs(slope)
+#: Resolution of the approach to gross sliding. At 128 nodes the punch's stick zone at
+#: 1 - Q/fP = 1e-5 is 4.2 cells (3.3e-2 of the width) short of J1: its margin f p(x, P - Q/f)
+#: is 1e-5 of f p on the flat, below what the lattice resolves there (the stick zone first
+#: falls short of J1 at 1 - Q/fP ~ 1e-5 (128 nodes), 1e-6 (256), 1e-7 (512), 1e-8 (1024),
+#: 1e-9 (4096)); 512 nodes resolve the decades down to 1e-6.
+VANISH_NODES = 512
+#: J1 near gross sliding, in cells: measured <= 0.8 of a cell on the punch down to 1e-6 (512
+#: nodes), and 1.5 cells on Hertz once b < h (two stuck cells at the centre put the edges at
+#: their slipping neighbours' centres; first order in h: 1.2e-2 / 5.9e-3 / 2.9e-3 / 1.5e-3 of
+#: the width at 128 / 256 / 512 / 1024 nodes).
+VANISH_CELLS = 3.0
+#: J2 after gross sliding (contact widths), at 512 nodes: measured <= 2.3e-4 (Hertz) and 3.1e-4
+#: (punch); 6.6e-4 / 2.3e-3 at 128, 4.4e-4 / 3.9e-4 at 256, 1.3e-4 / 4.5e-5 at 1024.
+J2_EDGE_TOL = 8e-4
 
 
 @pytest.mark.parametrize("kind", ["hertz", "punch"])
 def test_stick_zone_vanishes_gross_sliding_and_back(kind):
-    """Q -> f P at constant P in steps down to 1 - Q/fP = 1e-5 (J1 at every step), then
-    gross sliding (abs(Q) > f P: regime, message, q = f p, carried force f P), then back
-    into partial slip: after gross sliding the state is that of Cattaneo at Q_max = +-f P,
-    so unloading follows J2, c = a(P - (Q_max - Q)/(2f)), exactly (E piecewise linear)."""
-    problem, solver = make(kind, 128)
+    """Q -> f P at constant P in steps down to 1 - Q/fP = 1e-5 (J1 at every step, to
+    VANISH_CELLS cells), then gross sliding (abs(Q) > f P: regime, message, q = f p, carried
+    force f P), then back into partial slip: after gross sliding the state is that of
+    Cattaneo at Q_max = +-f P, so unloading follows J2, c = a(P - (Q_max - Q)/(2f))
+    (J2_EDGE_TOL)."""
+    problem, solver = make(kind, VANISH_NODES)
     a = float(problem.half_width(P0))
     state = walk(solver, [(P0, 0.0)])[-1][0]
     for gap in np.logspace(-1, -5, 5):
         state, report = walk(solver, [(P0, (1 - gap) * F * P0)], state)[-1]
         b = float(problem.half_width(gap * P0))
         assert report.regime == Regime.PARTIAL_SLIP
-        assert max(abs(state.stick_left + b), abs(state.stick_right - b)) <= j1_edge_tol(problem, gap * P0, 2 * a)
+        assert_stick_zone(state, -b, b, VANISH_CELLS * cells_per_width(state))
     for Q_max, Qs in ((F * P0, (0.5, -0.5)), (-F * P0, (0.3,))):
         state, report = walk(solver, [(P0, 1.5 * Q_max)], state)[-1]
         assert report.regime == Regime.GROSS_SLIDING and report.message == GROSS_SLIDING_MESSAGE
@@ -716,64 +905,69 @@ def test_stick_zone_vanishes_gross_sliding_and_back(kind):
             state, report = walk(solver, [(P0, ratio * F * P0)], state)[-1]
             c = float(problem.half_width(P0 - abs(Q_max - ratio * F * P0) / (2 * F)))
             assert report.regime == Regime.PARTIAL_SLIP
-            assert edge_error(state, -c, c) < EXACT_EDGE_TOL
+            assert_stick_zone(state, -c, c, J2_EDGE_TOL)
 
 
-SMALL_STICK_PUNCH = (
-    "BUG: punch, Q = (1 - 1e-11) f P: the stick zone [-b, b] overhangs the flat by b - w = 6.6e-9 "
-    "of the width and its edges come out 2.4e-8 of the width (4x the overhang) from J1, above "
-    "the conditioning bound 4e-9 (the stick interval ends within 1e-8 of the width of the "
-    "knots at +-w, the regime of the tiny-load punch bug below)")
-
-
-@pytest.mark.parametrize("kind", [pytest.param("hertz", marks=pytest.mark.skip(reason=MIS_TRIM)),
-                                  pytest.param("punch", marks=pytest.mark.skip(reason=SMALL_STICK_PUNCH))])
+@pytest.mark.parametrize("kind", ["hertz", "punch"])
 def test_stick_zone_vanishes_in_small_increments(kind):
-    """Continuing the approach to Q = f P in decades (1 - Q/fP = 1e-6 .. 1e-11): J1 still holds
-    (to the conditioning of the edge, j1_edge_tol). With the trim against max abs(E) these
-    steps are reported as STICK with the stick zone = the contact (Hertz: 0.5 of the width off)."""
-    problem, solver = make(kind, 128)
-    a = float(problem.half_width(P0))
+    """Continuing the approach to Q = f P in decades (1 - Q/fP = 1e-6 .. 1e-11): every step
+    PARTIAL_SLIP and J1 still holds to VANISH_CELLS cells (the singular-integral solver
+    reported these steps as STICK with the stick zone = the contact).
+
+    Fails for the rounded punch (a limit of the lattice, at every resolution tried): J1's
+    stick zone tends to the flat [-w, w] as Q -> f P, with a margin f p(x, P - Q/f) that
+    vanishes with 1 - Q/fP; below ~1e-7 at 512 nodes the lattice's stick zone collapses to
+    the middle or to islands at +-w and the flat slips: 10 stuck cells of 376 at 1e-7
+    (stick edges 3.5e-3 of the width off, 1.8 cells), 2 at 1e-10 (5.4e-3); at 128 nodes
+    (edges off by 0.36 of the width at 1e-10) and 4096 nodes (12 stuck cells of 3010 at
+    1e-9) alike. q itself stays within 1 - Q/fP of f p.
+    """
+    problem, solver = make(kind, VANISH_NODES)
     state = walk(solver, [(P0, 0.0), (P0, (1 - 1e-5) * F * P0)])[-1][0]
     for gap in np.logspace(-6, -11, 6):
         state, report = walk(solver, [(P0, (1 - gap) * F * P0)], state)[-1]
         b = float(problem.half_width(gap * P0))
         assert report.regime == Regime.PARTIAL_SLIP
-        assert max(abs(state.stick_left + b), abs(state.stick_right - b)) <= j1_edge_tol(problem, gap * P0, 2 * a)
+        assert_stick_zone(state, -b, b, VANISH_CELLS * cells_per_width(state))
 
 
 SEPARATION_PATH = [(P0, 0.5 * F * P0), (1e-9 * P0, 0.0), (0.0, 0.0), (1e-12 * P0, 0.3 * F * 1e-12 * P0),
                    (P0, 0.3 * F * P0), (1e-6 * P0, -0.3 * F * P0), (P0, 0.0), (1e-6 * P0, 0.5 * F * 1e-6 * P0),
                    (1e-6 * P0, -0.5 * F * 1e-6 * P0), (P0, 0.1 * F * P0), (-1.0, 0.0), (2e-12 * P0, F * 1e-12 * P0)]
-TINY_PUNCH = (
-    "BUG: rounded punch under tiny P (contact overhangs the flat by e = a - w ~ 4e-9 w at "
-    "P = 1e-7 N/m): loading P and Q = 0.3 f P together from separation (exact: q = 0.3 f p) "
-    "gives q / (0.3 f p) = 0.63-0.72 in the interior and int q = 0.81 Q while the representation "
-    "says Q (the exact inversion of the stick data loses accuracy when knots lie within ~1e-9 of "
-    "the width from the ends; E itself is right to 2.5e-4); 1.7e-4 f P at P = 1e-5 N/m. "
-    "Unloading (P0, 0.5 f P0) -> (1e-9 P0, 0) also fails: 'no slip-zone configuration converged; "
-    "kept full stick', int q - Q = 7.8e-6 f P")
+#: Full stick under proportional loading, int abs(q - (Q/P) p) dx / Q, at 128 nodes. Measured
+#: from rest and continuing a proportional state at P0: 1.6e-4 / 5.6e-5 / 2.0e-5 / 7.1e-6 (Hertz)
+#: and 8.7e-4 / 3.0e-4 / 9.5e-5 / 3.2e-5 (punch) at 128 / 256 / 512 / 1024 nodes: order 1.5.
+#: (Hertz re-contact at 1e-12 P0 falls within one cell of the P0 lattice: exact, 8e-10.)
+PROPORTIONAL_TOL = {"hertz": 5e-4, "punch": 2e-3}
 
 
-@pytest.mark.parametrize("kind", ["hertz", pytest.param("punch", marks=pytest.mark.skip(reason=TINY_PUNCH))])
+@pytest.mark.parametrize("kind", ["hertz", "punch"])
 def test_separation_recontact_and_tiny_loads(kind):
     """P down to 1e-9 P0, separation (P = 0 and P < 0: memory lost), re-contact at
     P = 1e-12 P0 with Q/P = 0.3 f, P tiny (1e-6 P0) under a shear history of +-0.3 f P0
-    (gross sliding) and +-0.5 f P: regimes as expected and invariants at every step; on
-    re-contact from separation with Q/P fixed the contact sticks fully, q = (Q/P) p
-    (test_general: 5e-4 of max q at 32-512 nodes)."""
+    (gross sliding) and +-0.5 f P: regimes as expected and invariants at every step. Loads
+    raised in proportion from separation (steps 0, 3, 11) or continuing a proportional state
+    (step 4) stick fully with q = (Q/P) p (physics.md, first trap): PROPORTIONAL_TOL in L1.
+
+    Fails for the rounded punch: re-contact at P = 1e-12 P0 (1e-7 N/m; the contact overhangs
+    the flat by 4e-9 w, so p ~ 1/sqrt on the flat) gives int abs(q - 0.3 f p) = 2.1e-2 Q at
+    128 nodes, and it does not converge: 2.1e-2 / 2.3e-2 / 1.9e-2 at 256 / 512 / 1024 (the
+    end cells 7.5e-2 / 0.10 / 0.16 / 0.28 off (q_j / (0.3 f cap_j) - 1), the interior 5e-3 at
+    128 nodes). The same at P = 10 N/m (1.3e-2 at 1024 nodes); 1.4e-3 at 1e3 N/m.
+    """
     problem, solver = make(kind, 128)
     out = walk(solver, SEPARATION_PATH)
     regimes = [r.regime for _, r in out]
     assert regimes[2] == regimes[10] == Regime.SEPARATED
     assert regimes[5] == Regime.GROSS_SLIDING
-    for i in (3, 11):  # re-contact from separation, loads proportional
+    for i in (0, 3, 4, 11):
         state, report = out[i]
         assert report.regime == Regime.STICK and not report.slipped
-        x = np.linspace(state.contact_left, state.contact_right, 1601)
+        x, w = contact_nodes(solver, state.memory)
         p, q = solver.tractions(state.memory, x)
         ratio = state.loads.Q / state.loads.P
-        assert np.max(np.abs(q - ratio * p)) <= 5e-4 * ratio * p.max()
+        error = float(w @ np.abs(q - ratio * p)) / abs(state.loads.Q)
+        assert error <= PROPORTIONAL_TOL[kind], f"step {i}: int abs(q - (Q/P) p) = {error:.3g} Q"
 
 
 # =============================================================================
@@ -793,7 +987,7 @@ def cycle(solver, state, loads_of, per_cycle, cycles, keep, full_check):
                 check_step(solver, prev, state, report)
             else:
                 assert state.dissipation >= prev.dissipation and math.isfinite(state.shift)
-                assert report.message in ALLOWED_MESSAGES, report.message
+                assert report.converged and report.message in ALLOWED_MESSAGES, report.message
                 assert state.contact_left <= state.stick_left <= state.stick_right <= state.contact_right
                 assert solver.shear_force(state.memory) == pytest.approx(state.loads.Q, abs=FORCE_TOL * F * P0)
             if c in keep:
@@ -801,25 +995,37 @@ def cycle(solver, state, loads_of, per_cycle, cycles, keep, full_check):
     return kept
 
 
-def assert_same_cycle(solver, tenth, last, edge_tol=1e-4, strain_tol=1e-4, q_tol=1e-4):
-    """Stick edges (contact widths), E on a common grid (max abs(E)) and q (f max p) at every phase."""
+#: A cycle repeats the cycle before to rounding: the active-set pattern of every step repeats,
+#: and with it the step's problem and its solve. Measured 0 (bit-identical states from the 5th
+#: cycle on) in every history below: stick edges (contact widths), q (f max p) and the locked
+#: displacements g less the rigid shift (A f max p times the contact width, the displacement
+#: scale), and the dissipation per cycle (relative; <= 3e-14).
+CYCLE_TOL = 1e-12
+
+
+def assert_same_cycle(solver, tenth, last, tol=CYCLE_TOL):
+    """Same cells, stick edges, q and locked displacements (less the shift) at every phase."""
     for s10, sN in zip(tenth, last):
+        m10, mN = s10.memory, sN.memory
         assert (sN.contact_left, sN.contact_right) == (s10.contact_left, s10.contact_right)
-        assert edge_error(sN, s10.stick_left, s10.stick_right) <= edge_tol
-        x = np.linspace(s10.contact_left, s10.contact_right, 2001)
-        e10, eN = strain_on(s10.memory, x), strain_on(sN.memory, x)
-        assert np.max(np.abs(eN - e10)) <= strain_tol * np.max(np.abs(e10))
-        p, q10 = solver.tractions(s10.memory, x)
-        assert np.max(np.abs(solver.tractions(sN.memory, x)[1] - q10)) <= q_tol * F * p.max()
+        assert (mN.first, mN.q.size) == (m10.first, m10.q.size) and np.array_equal(mN.status, m10.status)
+        assert edge_error(sN, s10.stick_left, s10.stick_right) <= tol
+        fmax = F * float(np.max(m10.capacity))
+        assert np.max(np.abs(mN.q - m10.q)) <= tol * fmax
+        scale = A * fmax * (s10.contact_right - s10.contact_left)
+        assert np.max(np.abs((mN.g - m10.g) - (sN.shift - s10.shift))) <= tol * scale
+
+
+#: J2 at the load extremes of the steady Cattaneo cycle (contact widths): measured 3.5e-4 /
+#: 4.6e-4 / 2.5e-4 at 128 / 256 / 512 nodes.
+PERMANENT_EDGE_TOL = 1e-3
 
 
 @pytest.mark.parametrize("cycles", [30, pytest.param(1000, marks=pytest.mark.slow)])
 def test_many_cycles_hertz_shear(cycles):
-    """Hertz, constant P, Q = 0.6 f P sin: after the 10th cycle the state repeats (stick
-    edges 1e-4 of the width, E 1e-4 of max abs(E), q 1e-4 of f max p: the solver's
-    tolerance; measured 1e-13 / 1e-10 / 1e-10), the dissipation per cycle is constant
-    (1e-6: trapezoid of identical states), and at the load extremes the stick zone is the
-    permanent one, a(P - dQ/(2f)) (J2; 2e-5 of the width at 128 nodes, as test_general)."""
+    """Hertz, constant P, Q = 0.6 f P sin: after the 10th cycle the state repeats
+    (assert_same_cycle), the dissipation per cycle is constant (CYCLE_TOL), and at the load
+    extremes the stick zone is the permanent one, a(P - dQ/(2f)) (J2, PERMANENT_EDGE_TOL)."""
     problem, solver = make("hertz", 128)
     a = float(problem.half_width(P0))
     per_cycle = 16
@@ -829,10 +1035,10 @@ def test_many_cycles_hertz_shear(cycles):
     assert_same_cycle(solver, kept[9], kept[cycles - 1])
     per_cycle_10 = kept[9][-1].dissipation - kept[8][-1].dissipation
     per_cycle_last = kept[cycles - 1][-1].dissipation - kept[cycles - 2][-1].dissipation
-    assert per_cycle_10 > 0 and per_cycle_last == pytest.approx(per_cycle_10, rel=1e-6)
+    assert per_cycle_10 > 0 and per_cycle_last == pytest.approx(per_cycle_10, rel=CYCLE_TOL)
     c = a * math.sqrt(1 - 0.6)
     for k in (per_cycle // 4 - 1, 3 * per_cycle // 4 - 1):  # Q = +-Q_max
-        assert edge_error(kept[cycles - 1][k], -c, c) < 2e-5
+        assert_stick_zone(kept[cycles - 1][k], -c, c, PERMANENT_EDGE_TOL)
 
 
 def shear_and_tension(u):
@@ -840,13 +1046,17 @@ def shear_and_tension(u):
     return (P0, 0.15 * F * P0 + 0.35 * F * P0 * s, 0.0, 3e7 + 5e7 * s)
 
 
+#: SS2 at the load extremes (contact widths): measured 7.4e-3 / 1.5e-3 / 1.4e-3 at 128 / 256 /
+#: 512 nodes (0.95 of a cell at 128).
+SS2_EDGE_TOL = 1.5e-2
+
+
 @pytest.mark.parametrize("cycles", [12, pytest.param(1000, marks=pytest.mark.slow)])
 def test_many_cycles_shear_and_tension(cycles):
     """Hertz, constant P, Q and sigma in phase (Q = 0.15 f P + 0.35 f P sin, sigma = 3e7 + 5e7
     sin): at the load extremes of every kept cycle from the second on, the stick zone is the
     permanent stick zone of SS2, half-width d^2 = a^2 - A R dQ/(pi f), centre
-    e = -A R dsigma/(8 f) (2e-5 of the width; measured 4.7e-6 at 128 nodes); after the 10th
-    cycle the state repeats (edges, E and q to 1e-4; measured 1e-13 / 1e-10 / 1e-10)."""
+    e = -A R dsigma/(8 f) (SS2_EDGE_TOL); after the 10th cycle the state repeats."""
     problem, solver = make("hertz", 128)
     a = float(problem.half_width(P0))
     per_cycle = 16
@@ -857,7 +1067,7 @@ def test_many_cycles_shear_and_tension(cycles):
     e = -A * R_HERTZ * 1e8 / (8 * F)
     for states in kept.values():
         for k in (per_cycle // 4 - 1, 3 * per_cycle // 4 - 1):
-            assert edge_error(states[k], e - d, e + d) < 2e-5
+            assert_stick_zone(states[k], e - d, e + d, SS2_EDGE_TOL)
     assert_same_cycle(solver, kept[9], kept[cycles - 1])
 
 
@@ -867,26 +1077,17 @@ def lifted_flat_cycle(u):
     return (P, 0.4 * F * P0 * s, (0.85 + 0.05 * s) * P * W_FLAT, 2e7 * s)
 
 
-LIFTED_FLAT_DRIFT = (
-    "BUG: punch (w = 0.2 mm) with the flat partly lifted, P (+-10%), Q, M and sigma in phase "
-    "(lifted_flat_cycle), 128 nodes, 16 steps/cycle: no periodic state in 30 cycles. Consecutive "
-    "cycles differ by 2e-4..2e-3 of f max p in q and 3e-4..4e-3 of max abs(E), and in cycles 5, "
-    "15, 22, 26 a stick edge jumps by 4e-2 of the width and back (HEAD 80484a2; on 9d17811 q "
-    "jumped by 3.7e-2 of f max p in cycles 4, 14, 19, 29); at 256 nodes a step of cycle 1 fails "
-    "('kept the closest (violation 1.7 x tolerance)')")
-
-
 @pytest.mark.parametrize("history,nodes,per_cycle,cycles", [
-    pytest.param("lifted_flat", 128, 16, 30, marks=pytest.mark.skip(reason=LIFTED_FLAT_DRIFT)),
+    ("lifted_flat", 128, 16, 30),
     pytest.param("dovetail", 128, 16, 30, marks=pytest.mark.slow),
     pytest.param("dovetail", 256, 16, 200, marks=pytest.mark.slow),
 ])
 def test_many_cycles_punch_moment_and_tension(history, nodes, per_cycle, cycles):
     """Rounded punch, P, Q, M and sigma in phase: about the partly lifted flat of test 1, and
-    the dovetail of the benchmarks (w = 2 mm, R = 10 mm, Ti; 16 s for 30 cycles at 128 nodes,
-    hence slow only; 200 cycles at 256 nodes keep the slow run near 10 minutes). After the
-    10th cycle the state repeats: edges, E and q to 1e-4 (the solver's tolerance; the
-    dovetail measured 1e-13 / 2e-9 / 4e-10 at 256 nodes)."""
+    the dovetail of the benchmarks (w = 2 mm, R = 10 mm, Ti). After the 10th cycle the state
+    repeats (assert_same_cycle). (The singular-integral solver found no periodic state about
+    the lifted flat: q drifted by 2e-4..2e-3 of f max p per cycle, with stick-edge jumps of
+    4e-2 of the width.)"""
     if history == "dovetail":
         from halfslip.geometry import Material
 
@@ -900,7 +1101,7 @@ def test_many_cycles_punch_moment_and_tension(history, nodes, per_cycle, cycles)
             return tuple(m + am * s for m, am in zip(mean, amplitude))
     else:
         problem, solver = make("punch", nodes)
-        state = lift_and_shear(solver, problem)
+        state = lift_and_shear(solver, problem, nodes)
         loads = lifted_flat_cycle
     kept = cycle(solver, state, loads, per_cycle, cycles, keep=(9, cycles - 1), full_check=(9, cycles - 1))
     assert_same_cycle(solver, kept[9], kept[cycles - 1])
@@ -909,13 +1110,163 @@ def test_many_cycles_punch_moment_and_tension(history, nodes, per_cycle, cycles)
 @pytest.mark.parametrize("nodes,per_cycle", [(64, 40), (128, 32), pytest.param(64, 32, marks=pytest.mark.slow),
                                               pytest.param(128, 40, marks=pytest.mark.slow)])
 def test_coulomb_after_reversal_at_coarse_resolution(nodes, per_cycle):
-    """Two Cattaneo-Mindlin cycles at coarse resolution: Coulomb within COULOMB_TOL at every step.
-
-    The first step after the reversal at Q = -0.6 f P leaves material between the first
-    stick edge (a square-root point of E at 0.632 a) and the new slip zones locked at the
-    slip limit; the interpolation error next to that point must not push q beyond f p by
-    more than the solver's own acceptance."""
+    """Two Cattaneo-Mindlin cycles at coarse resolution: Coulomb (COULOMB_TOL) and all other
+    invariants at every step, in particular on the first steps after the reversals, where
+    material locked at the slip limit meets the new slip zones (the singular-integral
+    solver's interpolation of the locked strain pushed q beyond f p there)."""
     problem, solver = make("hertz", nodes)
     path = [(P0, 0.0)] + [(P0, 0.6 * F * P0 * math.sin(2 * math.pi * k / per_cycle))
                           for k in range(1, 2 * per_cycle + 1)]
-    walk(solver, path)
+    out = walk(solver, path)
+    extremes = [k for k in range(1, 2 * per_cycle + 1) if k % (per_cycle // 2) == per_cycle // 4]
+    assert all(out[k][1].regime == Regime.PARTIAL_SLIP and out[k][1].slipped for k in extremes)
+
+
+# =============================================================================
+# 7. random straight-ramp histories (hypothesis)
+# =============================================================================
+def check_slip_direction(solver, prev, state):
+    """Cells that slipped in the step carry their bound (check_step) with the sign of their
+    slip increment, and cells that stuck did not slip.
+
+    The increment is the change of the accumulated slip G of the cell over the step (G starts
+    at 0 when the cell enters contact). Tolerance: the solver turns a slipping cell back to
+    stick only for a reversed increment beyond general.FLIP_TOL = 1e-10 of A f max cap h (the
+    slip a cell's bound shear makes), so 1e-9 of that, plus the rounding of G (4 eps abs(G));
+    measured: no reversed increment on partial-slip steps. Only for a step taken in one
+    piece (``solver.travel = solver.stick_travel = 0``): in a sub-stepped step, status is the
+    last sub-step's and G changes over all of them.
+    """
+    mem, old = state.memory, prev.memory
+    if mem.normal is None:
+        return
+    n = mem.q.size
+    dG = mem.G.copy()
+    known = np.zeros(n, bool)
+    if old.normal is not None and old.spacing == mem.spacing:
+        lo, hi = max(mem.first, old.first), min(mem.first + n, old.first + old.q.size)
+        if hi > lo:
+            dG[lo - mem.first:hi - mem.first] -= old.G[lo - old.first:hi - old.first]
+            known[lo - mem.first:hi - mem.first] = True
+    scale = A * F * float(np.max(mem.capacity)) * mem.spacing
+    reversed_ = (mem.status != 0) & (mem.status * dG < -(1e-9 * scale + 4 * EPS * np.abs(mem.G)))
+    assert not np.any(reversed_), (
+        f"{int(np.sum(reversed_))} of {n} cells slipped against their shear, by up to "
+        f"{float(np.max((-mem.status * dG)[reversed_])) / scale:.3g} A f max cap h, in a step to {state.loads} "
+        f"({'gross sliding' if np.all(mem.status == mem.status[0]) else 'partial slip'})")
+    stuck = (mem.status == 0) & known
+    assert np.all(dG[stuck] == 0.0), "a stuck cell slipped"
+
+
+def random_history(draw, kind):
+    """Straight ramps between random corners of (P, Q, M, sigma), each in 1-3 equal steps.
+
+    P in [0.2, 1.5] P0 (one corner in 12 separates: P = 0 or -0.1 P0), Q in [-1.1, 1.1] f P
+    (gross sliding beyond 1), M up to 0.5 P a(P) (Hertz) or 0.8 P w (punch: the flat partly
+    lifted), sigma up to 3e7 Pa.
+    """
+    problem = NormalProblem(helpers.PROFILES[kind], A)
+    path = []
+    for _ in range(draw(st.integers(2, 7))):
+        if draw(st.integers(0, 11)) == 0:
+            corner = (draw(st.sampled_from([0.0, -0.1 * P0])), 0.0, 0.0, 0.0)
+        else:
+            P = draw(st.floats(0.2, 1.5)) * P0
+            arm = 0.5 * float(problem.half_width(P)) if kind == "hertz" else 0.8 * W_FLAT
+            corner = (P, draw(st.floats(-1.1, 1.1)) * F * P, draw(st.floats(-1.0, 1.0)) * arm * P,
+                      draw(st.floats(-3e7, 3e7)))
+        pieces = draw(st.integers(1, 3))
+        start = path[-1] if path else (0.0, 0.0, 0.0, 0.0)
+        path += [tuple(a + (b - a) * k / pieces for a, b in zip(start, corner)) for k in range(1, pieces)]
+        path.append(corner)
+    return path
+
+
+def run_random(kind, nodes, path, whole):
+    """March ``path``, checking every step; ``whole``: steps in one piece (no sub-steps), with the
+    slip direction of every cell checked."""
+    problem, solver = make(kind, nodes, **({"travel": 0.0, "stick_travel": 0.0} if whole else {}))
+    state = solver.initial_state()
+    for i, loads in enumerate(path):
+        prev = state
+        state, report = solver.step(state, i + 1.0, Loads(*loads))
+        check_step(solver, prev, state, report)
+        if whole:
+            check_slip_direction(solver, prev, state)
+
+
+@st.composite
+def hertz_histories(draw):
+    return random_history(draw, "hertz")
+
+
+@st.composite
+def punch_histories(draw):
+    return random_history(draw, "punch")
+
+
+RANDOM = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+
+
+@RANDOM
+@given(path=hertz_histories(), nodes=st.sampled_from([64, 128, 256]), whole=st.booleans())
+def test_random_ramps_hertz(path, nodes, whole):
+    """Random ramp histories on Hertz: every step converged, with all invariants of
+    check_step (equilibrium int q = Q or the gross-sliding force, Coulomb, ...) and the slip
+    direction of every cell (check_slip_direction)."""
+    run_random("hertz", nodes, path, whole)
+
+
+@RANDOM
+@given(path=punch_histories(), nodes=st.sampled_from([64, 128, 256]), whole=st.booleans())
+def test_random_ramps_punch(path, nodes, whole):
+    """As test_random_ramps_hertz on the rounded punch, moments lifting part of the flat."""
+    run_random("punch", nodes, path, whole)
+
+
+@pytest.mark.slow
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(path=st.one_of(hertz_histories().map(lambda p: ("hertz", p)), punch_histories().map(lambda p: ("punch", p))),
+       nodes=st.sampled_from([64, 128, 256, 512]), whole=st.booleans())
+def test_random_ramps_long(path, nodes, whole):
+    """More random ramp histories, both profiles, up to 512 nodes."""
+    run_random(path[0], nodes, path[1], whole)
+
+
+def test_gross_sliding_slips_with_the_shear():
+    """Steps into gross sliding: every cell slips in the direction of its shear (physics.md:
+    q . slip increment >= 0; check_slip_direction), steps taken in one piece.
+
+    Fails (found by test_random_ramps_hertz): in gross sliding the solver fixes the rigid
+    shift by the cell in the middle of the old and new contacts' overlap (zero increment
+    there), so every cell whose relative displacement grows less than that one's has an
+    increment against its shear: measured -2.4e-4 A f max cap h on the punch, (P0, 0) ->
+    (P0, 1.5 f P0); -0.94 on Hertz, (P0, 0.5 f P0) -> (1.2 P0, 1.5 f P0, 2 N, 1e7 Pa); and
+    -1.4e-2 .. -7.8e-3 in every cell of Hertz loaded from separation to Q = f P (64 nodes).
+    The dissipation counts abs(increment), so the backward increments add to it.
+    """
+    for kind, path in (("punch", [(P0, 0.0), (P0, 1.5 * F * P0)]),
+                       ("hertz", [(P0, 0.0), (P0, 0.5 * F * P0), (1.2 * P0, 1.5 * F * P0, 2.0, 1e7)]),
+                       ("hertz", [(P0, F * P0)])):
+        problem, solver = make(kind, 64, travel=0.0, stick_travel=0.0)
+        state = solver.initial_state()
+        for i, loads in enumerate(path):
+            prev = state
+            state, report = solver.step(state, i + 1.0, Loads(*(tuple(loads) + (0.0,) * (4 - len(loads)))))
+            check_slip_direction(solver, prev, state)
+        assert report.regime == Regime.GROSS_SLIDING
+
+
+@pytest.mark.parametrize("nodes", [64, 128, 256, 512])
+def test_contact_formed_near_gross_sliding_with_a_moment(nodes):
+    """A contact formed in one step from separation with Q = -0.99999 f P and a moment
+    (P = 1e4 N/m, M = -0.4175 N: centre 0.82 a off the axis; found by test_random_ramps_hertz):
+    the step converges with finite values and all invariants.
+
+    Fails at 64, 128 and 256 nodes (a solver defect): the conjugate gradients of the
+    multi-run stick solve (_toeplitz.py, alpha = rz / p.Ap) divide by zero, and the step
+    returns q, shift and dissipation NaN with converged = False (residual NaN); also with
+    M = -0.2 N; at 512 nodes it converges (two stick intervals).
+    """
+    problem, solver = make("hertz", nodes, travel=0.0, stick_travel=0.0)
+    walk(solver, [(1e4, -0.99999 * F * 1e4, -0.4174978304517685, 0.0)])
