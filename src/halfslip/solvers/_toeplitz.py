@@ -233,12 +233,14 @@ class ToeplitzLattice:
         it = 0
         while it < max_iter and np.max(np.sqrt(np.sum(r * r, axis=0)) / norm) > tol:
             Ap = op(p)
-            alpha = rz / np.sum(p * Ap, axis=0)
+            pAp = np.sum(p * Ap, axis=0)
+            # a column already solved (zero residual, e.g. a zero right-hand side) stays put
+            alpha = np.divide(rz, pAp, out=np.zeros_like(rz), where=pAp > 0.0)
             y += alpha * p
             r -= alpha * Ap
             z = prec(r)
             rz_new = np.sum(r * z, axis=0)
-            p = z + (rz_new / rz) * p
+            p = z + np.divide(rz_new, rz, out=np.zeros_like(rz), where=rz > 0.0) * p
             rz = rz_new
             it += 1
         return y, it
