@@ -1260,13 +1260,13 @@ def test_gross_sliding_slips_with_the_shear():
     """Steps into gross sliding: every cell slips in the direction of its shear (physics.md:
     q . slip increment >= 0; check_slip_direction), steps taken in one piece.
 
-    Fails (found by test_random_ramps_hertz): in gross sliding the solver fixes the rigid
-    shift by the cell in the middle of the old and new contacts' overlap (zero increment
-    there), so every cell whose relative displacement grows less than that one's has an
-    increment against its shear: measured -2.4e-4 A f max cap h on the punch, (P0, 0) ->
-    (P0, 1.5 f P0); -0.94 on Hertz, (P0, 0.5 f P0) -> (1.2 P0, 1.5 f P0, 2 N, 1e7 Pa); and
-    -1.4e-2 .. -7.8e-3 in every cell of Hertz loaded from separation to Q = f P (64 nodes).
-    The dissipation counts abs(increment), so the backward increments add to it.
+    Found by test_random_ramps_hertz and fixed: the solver fixed the rigid shift in gross
+    sliding by the cell in the middle of the old and new contacts' overlap, so every cell
+    whose displacement grew less than that one's had an increment against its shear
+    (measured -2.4e-4 A f max cap h on the punch, (P0, 0) -> (P0, 1.5 f P0); -0.94 on Hertz,
+    (P0, 0.5 f P0) -> (1.2 P0, 1.5 f P0, 2 N, 1e7 Pa); -1.4e-2 .. -7.8e-3 in every cell of
+    Hertz loaded from separation to Q = f P, 64 nodes). It now slides by the least amount
+    that keeps every increment in the direction of the shear.
     """
     for kind, path in (("punch", [(P0, 0.0), (P0, 1.5 * F * P0)]),
                        ("hertz", [(P0, 0.0), (P0, 0.5 * F * P0), (1.2 * P0, 1.5 * F * P0, 2.0, 1e7)]),
@@ -1286,10 +1286,10 @@ def test_contact_formed_near_gross_sliding_with_a_moment(nodes):
     (P = 1e4 N/m, M = -0.4175 N: centre 0.82 a off the axis; found by test_random_ramps_hertz):
     the step converges with finite values and all invariants.
 
-    Fails at 64, 128 and 256 nodes (a solver defect): the conjugate gradients of the
-    multi-run stick solve (_toeplitz.py, alpha = rz / p.Ap) divide by zero, and the step
-    returns q, shift and dissipation NaN with converged = False (residual NaN); also with
-    M = -0.2 N; at 512 nodes it converges (two stick intervals).
+    Found failing at 64, 128 and 256 nodes and fixed: the conjugate gradients of the
+    multi-run stick solve (_toeplitz.py) divided 0 by 0 for a column already solved, and
+    the step returned q, shift and dissipation NaN with converged = False (residual NaN);
+    also with M = -0.2 N; at 512 nodes it converged (two stick intervals).
     """
     problem, solver = make("hertz", nodes, travel=0.0, stick_travel=0.0)
     walk(solver, [(1e4, -0.99999 * F * 1e4, -0.4174978304517685, 0.0)])
