@@ -317,16 +317,14 @@ def test_quadrature_integrates_the_pressure():
 @pytest.mark.parametrize("nodes", [128, 512])
 def test_capacity_is_the_mean_pressure_of_each_cell(kind, P, nodes):
     """cap_j = (1/h) int p over cell j (GeneralMemory.capacity), which makes the output shear
-    q = (q_j / cap_j) p integrate to h sum q_j = Q. Tolerance 1e-11 of h max cap: the Hertz
-    cells are integrated by the solver's 4-point rule to <= 2.7e-12 (measured), the quadrature
-    here to ~1e-13.
+    q = (q_j / cap_j) p integrate to h sum q_j = Q. Tolerance 1e-11 of h max cap: the solver's
+    rule (8-point Gauss in theta per cell; at the ends of a punch flat cut, graded and 16-point)
+    measures ~1e-14, the quadrature here ~1e-13.
 
-    Fails on the rounded punch (a solver defect, src/halfslip/solvers/general.py, _Load): the
-    4-point Gauss rule in theta does not see the x ln x kink of p at the ends of the flat
-    (x = +-w) inside a cell. Measured error of h cap in that cell, relative to h max cap:
-    7.6e-5 (P0), 7.6e-4 (1e-2 P0), 6.3e-2 (1e-4 P0, edge 8e-4 w from the flat's end) at 128
-    nodes; 8.9e-5, 4.7e-4, 7.9e-3 at 512; and int q - Q = 3e-7, 4e-6, 1e-4 f P at 128 nodes
-    (P = 0.5 f P, one step).
+    Found failing on the rounded punch and fixed: a 4-point rule that did not see the x ln x
+    kink of p at the ends of the flat (x = +-w) inside a cell had the capacity of that cell
+    off by 7.6e-5 (P0), 7.6e-4 (1e-2 P0), 6.3e-2 (1e-4 P0) of h max cap at 128 nodes, and
+    int q - Q = 3e-7 .. 1e-4 f P.
     """
     problem, solver = make(kind, nodes)
     state = walk_unchecked(solver, [(P, 0.0), (P, 0.5 * F * P)])
