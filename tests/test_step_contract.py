@@ -60,8 +60,8 @@ def test_a_failed_step_is_stored_counted_and_summarised(monkeypatch, tmp_path):
         seen["steps"] += 1
         return original_step(self, *args)
 
-    def perturbed_once(self, lat, n, r, qmax, total, status, gscale):
-        q, delta, pattern, Tq, iterations, restarts = original_solve(self, lat, n, r, qmax, total, status, gscale)
+    def perturbed_once(self, lat, n, r, qmax, total, status, *scales):
+        q, delta, pattern, Tq, iterations, restarts = original_solve(self, lat, n, r, qmax, total, status, *scales)
         if lat.h == min(self._lattices):  # the fine lattice (the error estimate's shadow is twice as coarse)
             if seen["steps"] == 6:
                 stick = np.flatnonzero(pattern == 0)
