@@ -796,6 +796,10 @@ def test_step_splitting_from_rest(kind, split):
 #: nodes, 1.6e-6 / 2.1e-6 / 9.0e-6 at 256, 2.0e-7 / 2.4e-9 / 3.1e-6 at 512: the time
 #: discretisation of the arrivals; the edges stay in their cells.
 AFTER_SLIP_EDGE_TOL = 1e-5
+#: How far a step's stick edges may be from the answer it is compared with, in units of its own
+#: error estimate (the estimate bounds the error: error / estimate measured <= 1.09 on J1/J2 at
+#: 128-512 nodes, <= 2.1 on a denser scan, 1.4 on the punch's approach to gross sliding).
+ESTIMATE_FACTOR = 3.0
 AFTER_SLIP_SPLIT_BUG = (
     "BUG (open, issue 14): Hertz, after a Cattaneo slip (P0, 0.7 f P0), the segment to (1.3 P0, "
     "0.2 f P0, 0.1 a P0, 2e7 Pa) taken as one step or split: the end states differ by more than the "
@@ -807,10 +811,10 @@ AFTER_SLIP_SPLIT_BUG = (
 
 
 @pytest.mark.parametrize("kind,nodes,steps", [
-    pytest.param("hertz", 128, 10, marks=pytest.mark.skip(reason=AFTER_SLIP_SPLIT_BUG)),
+    ("hertz", 128, 10),
     ("punch", 128, 10),
     ("punch", 128, 20),
-    pytest.param("hertz", 512, 100, marks=[pytest.mark.slow, pytest.mark.skip(reason=AFTER_SLIP_SPLIT_BUG)]),
+    pytest.param("hertz", 512, 100, marks=pytest.mark.slow),
     pytest.param("punch", 512, 100, marks=pytest.mark.slow),
 ])
 def test_step_splitting_after_slip(kind, nodes, steps):
@@ -820,23 +824,32 @@ def test_step_splitting_after_slip(kind, nodes, steps):
     arrival strip at the advancing edge); the outermost stick points agree to
     AFTER_SLIP_EDGE_TOL.
 
-    Fails for Hertz: the segment reverses slip at the right end while the right edge
+    Hertz does not meet the tolerance (an open defect of the lattice, AFTER_SLIP_SPLIT_BUG,
+    kept as a recorded outcome): the segment reverses slip at the right end while the right edge
     advances, and stick islands of one to four cells appear beyond the main stick zone or at
     the contact edge, differently for every split: outermost stick points 3.7e-2 of the
     width apart at 128 nodes (10 steps: 4 stick intervals, single step: 2), 1.1e-2 at 512
     nodes and 100 steps (stick_right 1.135 a after 100 steps, 1.110 a after one; with 200
     and 400 steps the contact's end cell sticks, stick_right = 1.217 a, the contact edge),
     while the widest stick intervals agree to 5.4e-3 and 6.7e-4 of the width and q to
-    1.8e-3 and 1.4e-3 of f max p in L2 (1.4e-2 in the worst cell).
+    1.8e-3 and 1.4e-3 of f max p in L2 (1.4e-2 in the worst cell). The wrong answer must not
+    look right: the steps' error estimates (StepReport.error_estimate) say so, and the
+    difference stays within ESTIMATE_FACTOR of the larger of them (single step at 128 nodes:
+    estimate 3.7e-2 against the difference 3.7e-2).
     """
     problem, solver = make(kind, nodes)
     a = float(problem.half_width(P0))
     slipped = walk(solver, [(P0, 0.0), (P0, 0.7 * F * P0)])[-1][0]
     end = (1.3 * P0, 0.2 * F * P0, 0.1 * a * P0, 2e7)
-    single = walk(solver, [end], slipped)[-1][0]
+    single, single_report = walk(solver, [end], slipped)[-1]
     fractions = list(np.arange(1, steps + 1) / steps)
-    state = walk(solver, split_path([end], fractions, (P0, 0.7 * F * P0, 0.0, 0.0)), slipped)[-1][0]
-    assert edge_error(state, single.stick_left, single.stick_right) <= AFTER_SLIP_EDGE_TOL
+    state, report = walk(solver, split_path([end], fractions, (P0, 0.7 * F * P0, 0.0, 0.0)), slipped)[-1]
+    difference = edge_error(state, single.stick_left, single.stick_right)
+    if kind == "punch":
+        assert difference <= AFTER_SLIP_EDGE_TOL
+    else:
+        said = max(single_report.error_estimate, report.error_estimate)
+        assert difference <= max(AFTER_SLIP_EDGE_TOL, ESTIMATE_FACTOR * said), AFTER_SLIP_SPLIT_BUG
 
 
 #: A tiny first step (or the graded sequence) after a Cattaneo slip against the single step,
@@ -846,7 +859,7 @@ def test_step_splitting_after_slip(kind, nodes, steps):
 TINY_AFTER_SLIP_TOL = 1e-6
 
 
-@pytest.mark.parametrize("kind", [pytest.param("hertz", marks=pytest.mark.skip(reason=AFTER_SLIP_SPLIT_BUG)), "punch"])
+@pytest.mark.parametrize("kind", ["hertz", "punch"])
 @pytest.mark.parametrize("split", ["tiny_first", "tiny_2e-9", "graded"])
 def test_tiny_steps_after_slip(kind, split):
     """As above with a first step of 1e-9 or 2e-9 of the segment (or the graded sequence 1e-9,
@@ -854,17 +867,24 @@ def test_tiny_steps_after_slip(kind, split):
     Coulomb excesses of 2-31 f max p after 2e-9), and the same end state as the single
     step (TINY_AFTER_SLIP_TOL).
 
-    Fails for Hertz, as test_step_splitting_after_slip: outermost stick points 2.8e-6
-    (tiny_first, tiny_2e-9) and 4.3e-6 (graded) of the width apart at 128 nodes, and the
-    widest stick intervals 6.4e-3 apart (two stick intervals in both states).
+    Hertz does not meet it, as test_step_splitting_after_slip (open defect, recorded outcome):
+    outermost stick points 2.8e-6 (tiny_first, tiny_2e-9) and 4.3e-6 (graded) of the width
+    apart at 128 nodes, and the widest stick intervals 6.4e-3 apart (two stick intervals in
+    both states); the steps' error estimates say more than that, and the difference must stay
+    within ESTIMATE_FACTOR of them.
     """
     problem, solver = make(kind, 128)
     a = float(problem.half_width(P0))
     slipped = walk(solver, [(P0, 0.0), (P0, 0.7 * F * P0)])[-1][0]
     end = (1.3 * P0, 0.2 * F * P0, 0.1 * a * P0, 2e7)
-    single = walk(solver, [end], slipped)[-1][0]
-    state = walk(solver, split_path([end], SPLITS[split], (P0, 0.7 * F * P0, 0.0, 0.0)), slipped)[-1][0]
-    assert edge_error(state, single.stick_left, single.stick_right) <= TINY_AFTER_SLIP_TOL
+    single, single_report = walk(solver, [end], slipped)[-1]
+    state, report = walk(solver, split_path([end], SPLITS[split], (P0, 0.7 * F * P0, 0.0, 0.0)), slipped)[-1]
+    difference = edge_error(state, single.stick_left, single.stick_right)
+    if kind == "punch":
+        assert difference <= TINY_AFTER_SLIP_TOL
+    else:
+        said = max(single_report.error_estimate, report.error_estimate)
+        assert difference <= max(TINY_AFTER_SLIP_TOL, ESTIMATE_FACTOR * said), AFTER_SLIP_SPLIT_BUG
 
 
 # =============================================================================
@@ -921,7 +941,7 @@ SMALL_STICK_PUNCH = (
     "off; 0.36 at 128 nodes, 12 of 3010 cells at 4096)")
 
 
-@pytest.mark.parametrize("kind", ["hertz", pytest.param("punch", marks=pytest.mark.skip(reason=SMALL_STICK_PUNCH))])
+@pytest.mark.parametrize("kind", ["hertz", "punch"])
 def test_stick_zone_vanishes_in_small_increments(kind):
     """Continuing the approach to Q = f P in decades (1 - Q/fP = 1e-6 .. 1e-11): every step
     PARTIAL_SLIP and J1 still holds to VANISH_CELLS cells (the singular-integral solver
@@ -933,7 +953,10 @@ def test_stick_zone_vanishes_in_small_increments(kind):
     the middle or to islands at +-w and the flat slips: 10 stuck cells of 376 at 1e-7
     (stick edges 3.5e-3 of the width off, 1.8 cells), 2 at 1e-10 (5.4e-3); at 128 nodes
     (edges off by 0.36 of the width at 1e-10) and 4096 nodes (12 stuck cells of 3010 at
-    1e-9) alike. q itself stays within 1 - Q/fP of f p.
+    1e-9) alike. q itself stays within 1 - Q/fP of f p. That open defect (SMALL_STICK_PUNCH)
+    must not look right: each step's error estimate says so (measured 1.9e-2 .. 3.4e-2 of the
+    width against errors 7.1e-3 .. 4.3e-2 at 512 nodes), and the error stays within
+    ESTIMATE_FACTOR of it.
     """
     problem, solver = make(kind, VANISH_NODES)
     state = walk(solver, [(P0, 0.0), (P0, (1 - 1e-5) * F * P0)])[-1][0]
@@ -941,7 +964,11 @@ def test_stick_zone_vanishes_in_small_increments(kind):
         state, report = walk(solver, [(P0, (1 - gap) * F * P0)], state)[-1]
         b = float(problem.half_width(gap * P0))
         assert report.regime == Regime.PARTIAL_SLIP
-        assert_stick_zone(state, -b, b, VANISH_CELLS * cells_per_width(state))
+        tol = VANISH_CELLS * cells_per_width(state)
+        if kind == "hertz":
+            assert_stick_zone(state, -b, b, tol)
+        else:
+            assert edge_error(state, -b, b) <= max(tol, ESTIMATE_FACTOR * report.error_estimate), SMALL_STICK_PUNCH
 
 
 SEPARATION_PATH = [(P0, 0.5 * F * P0), (1e-9 * P0, 0.0), (0.0, 0.0), (1e-12 * P0, 0.3 * F * 1e-12 * P0),
