@@ -810,6 +810,21 @@ AFTER_SLIP_SPLIT_BUG = (
     "limits)")
 
 
+def after_slip_split(kind, nodes, fractions):
+    """After a Cattaneo slip (P0, 0.7 f P0), the segment to (1.3 P0, 0.2 f P0, 0.1 a P0, 2e7 Pa) as one
+    step and split at ``fractions`` (invariants checked at every step): the distance of the two end
+    states' outermost stick points (contact widths) and the larger of the two last steps' error
+    estimates."""
+    problem, solver = make(kind, nodes)
+    a = float(problem.half_width(P0))
+    slipped = walk(solver, [(P0, 0.0), (P0, 0.7 * F * P0)])[-1][0]
+    end = (1.3 * P0, 0.2 * F * P0, 0.1 * a * P0, 2e7)
+    single, single_report = walk(solver, [end], slipped)[-1]
+    state, report = walk(solver, split_path([end], fractions, (P0, 0.7 * F * P0, 0.0, 0.0)), slipped)[-1]
+    difference = edge_error(state, single.stick_left, single.stick_right)
+    return difference, max(single_report.error_estimate, report.error_estimate)
+
+
 @pytest.mark.parametrize("kind,nodes,steps", [
     ("hertz", 128, 10),
     ("punch", 128, 10),
@@ -837,18 +852,10 @@ def test_step_splitting_after_slip(kind, nodes, steps):
     difference stays within ESTIMATE_FACTOR of the larger of them (single step at 128 nodes:
     estimate 3.7e-2 against the difference 3.7e-2).
     """
-    problem, solver = make(kind, nodes)
-    a = float(problem.half_width(P0))
-    slipped = walk(solver, [(P0, 0.0), (P0, 0.7 * F * P0)])[-1][0]
-    end = (1.3 * P0, 0.2 * F * P0, 0.1 * a * P0, 2e7)
-    single, single_report = walk(solver, [end], slipped)[-1]
-    fractions = list(np.arange(1, steps + 1) / steps)
-    state, report = walk(solver, split_path([end], fractions, (P0, 0.7 * F * P0, 0.0, 0.0)), slipped)[-1]
-    difference = edge_error(state, single.stick_left, single.stick_right)
+    difference, said = after_slip_split(kind, nodes, list(np.arange(1, steps + 1) / steps))
     if kind == "punch":
         assert difference <= AFTER_SLIP_EDGE_TOL
     else:
-        said = max(single_report.error_estimate, report.error_estimate)
         assert difference <= max(AFTER_SLIP_EDGE_TOL, ESTIMATE_FACTOR * said), AFTER_SLIP_SPLIT_BUG
 
 
@@ -873,17 +880,10 @@ def test_tiny_steps_after_slip(kind, split):
     both states); the steps' error estimates say more than that, and the difference must stay
     within ESTIMATE_FACTOR of them.
     """
-    problem, solver = make(kind, 128)
-    a = float(problem.half_width(P0))
-    slipped = walk(solver, [(P0, 0.0), (P0, 0.7 * F * P0)])[-1][0]
-    end = (1.3 * P0, 0.2 * F * P0, 0.1 * a * P0, 2e7)
-    single, single_report = walk(solver, [end], slipped)[-1]
-    state, report = walk(solver, split_path([end], SPLITS[split], (P0, 0.7 * F * P0, 0.0, 0.0)), slipped)[-1]
-    difference = edge_error(state, single.stick_left, single.stick_right)
+    difference, said = after_slip_split(kind, 128, SPLITS[split])
     if kind == "punch":
         assert difference <= TINY_AFTER_SLIP_TOL
     else:
-        said = max(single_report.error_estimate, report.error_estimate)
         assert difference <= max(TINY_AFTER_SLIP_TOL, ESTIMATE_FACTOR * said), AFTER_SLIP_SPLIT_BUG
 
 

@@ -417,8 +417,7 @@ class _Run:
             self.skip, jump = self.skipper.check(self.skip, i, state)
         # a failed step is always stored, and so is the last marched step before a skip
         if self.save.stored(i, n) or jump is not None or not report.converged:
-            error = report.error_estimate if self.name == "general" else 0.0
-            self._store(i, state, report.regime, report.converged, report.residual, error)
+            self._store(i, state, report.regime, report.converged, report.residual, report.error_estimate)
         self.i, self.state = (i, state) if jump is None else jump
 
     def _advance_chunk(self) -> None:

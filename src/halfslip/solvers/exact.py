@@ -376,7 +376,8 @@ class ExactMemory(TangentialSolver):
             dissipation=state.dissipation + dD,
             memory=mem,
         )
-        report = StepReport(regime, regime in (Regime.PARTIAL_SLIP, Regime.GROSS_SLIDING), P_changed, message)
+        report = StepReport(regime, regime in (Regime.PARTIAL_SLIP, Regime.GROSS_SLIDING), P_changed, message,
+                            error_estimate=0.0)
         return new_state, report
 
     @property

@@ -386,7 +386,8 @@ class GeneralSolver(TangentialSolver):
         sigma_term = 0.25 * A * loads1.sigma * x
         r = glock - sigma_term  # stick: (T q)_i - delta = -r_i
         qmax = f * cap
-        if abs(loads1.Q) >= f * loads1.P:
+        gross = abs(loads1.Q) >= f * loads1.P
+        if gross:
             sgn = 1 if loads1.Q > 0.0 else -1
             status = np.full(n, sgn, np.int8)
             q = sgn * qmax
@@ -396,7 +397,7 @@ class GeneralSolver(TangentialSolver):
             # the onset of gross sliding from partial slip); dissipation is then the least possible
             moved = Tq + r  # s = delta - moved
             delta_int = float(np.max(moved)) if sgn > 0 else float(np.min(moved))
-            iterations, residual, restarts = 0, 0.0, 0
+            iterations, restarts = 0, 0
             message = GROSS_SLIDING_MESSAGE if abs(loads1.Q) > f * loads1.P * (1.0 + 1e-12) else ""
         else:
             # a constant in r only shifts delta: take the common offset out (the locked displacements
@@ -406,16 +407,15 @@ class GeneralSolver(TangentialSolver):
                 lat, n, r - r0, qmax, loads1.Q / h, status, A * float(qmax.max()) * h, ROUNDING * float(np.max(np.abs(r))))
             delta_int += r0
             message = ""
-            residual = 0.0
         self.counters["iterations"] += iterations
         self.counters["restarts"] += restarts
         g = delta_int - Tq + sigma_term
         s = g - glock
         stick = status == 0
         slip = ~stick
-        if abs(loads1.Q) < f * loads1.P:
-            residual = _check(q, qmax, s, status, h * float(np.sum(q)), loads1.Q, f * loads1.P, f * float(cap.max()),
-                              A * f * float(cap.max()) * h, ROUNDING * float(np.max(np.abs(glock))))
+        residual = 0.0 if gross else _check(q, qmax, s, status, h * float(np.sum(q)), loads1.Q, f * loads1.P,
+                                            f * float(cap.max()), A * f * float(cap.max()) * h,
+                                            ROUNDING * float(np.max(np.abs(glock))))
         g = np.where(stick, glock, g)
         s = np.where(stick, 0.0, s)
         dissipation = float(np.sum(f * 0.5 * (cap0 + cap)[slip] * np.abs(s[slip]))) * h
