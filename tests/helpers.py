@@ -13,6 +13,7 @@ from halfslip.geometry import Hertz, NormalProblem, RoundedPunch
 from halfslip.state import Loads
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+DATA = Path(__file__).resolve().parent / "data"
 
 A = 4 * (1 - 0.3**2) / 200e9
 """Compliance 4(1 - nu^2)/E of steel on steel [1/Pa]."""
