@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 
 from ..geometry import NormalProblem, NormalSolution
@@ -33,8 +34,14 @@ from ..state import Loads
 ARRIVAL_POINTS = 49
 #: Normal solves per formation step (contact appearing from P <= 0), general profiles.
 FORMATION_SOLVES = 9
-#: Bisection steps for the arrival fraction lam_x.
+#: Bisection steps for the arrival fraction lam_x (formation steps; the reference the hermite roots reproduce).
 BISECTION_STEPS = 60
+#: Newton iterations at most for the arrival fraction on a monotone piece of a hermite edge path
+#: (quadratic convergence: 4 to 6 from the secant start; a step leaving the bracket bisects instead).
+NEWTON_STEPS = 60
+#: Half-width (in lam) of the neighbourhood of an extremum of a hermite edge in which the bisection is
+#: followed step by step rather than replaced by Newton (the edge is not safely monotone there).
+EXTREMUM_MARGIN = 1e-9
 
 
 
@@ -95,6 +102,8 @@ class EdgePath:
         P0, P1 = loads0.P, loads1.P
         self.lam_lo = 0.0 if start is not None else max(0.0, P0 / (P0 - P1)) if P0 < P1 else 0.0
         self.solves = 0
+        self._sides: dict[int, tuple] = {}
+        self._start: tuple[float, float] | None = None  # the edges at lam_lo
         self._symmetric = problem.profile.symmetric and loads0.M == 0.0 and loads1.M == 0.0
         if self._symmetric:
             self._kind = "symmetric"
@@ -152,24 +161,186 @@ class EdgePath:
 
         ``side`` is -1 for points arriving at the left edge, +1 at the right.
         Points already in contact at lam_lo get lam_lo.
+
+        Notes
+        -----
+        The answer is the limit of ``BISECTION_STEPS`` bisection steps on "x
+        is inside at lam" over [lam_lo, 1], which formation steps take as
+        such. A hermite edge is a cubic in lam: away from its extrema (found
+        once per side) it is monotone, and there the bisection converges to
+        the crossing clamped to the bracket (edge moving outwards) or to the
+        end of the bracket its first midpoint picks (moving inwards); Newton,
+        kept in the bracket, gives the crossing in a few iterations. Bisection
+        steps are taken only while the bracket holds an extremum (within
+        ``EXTREMUM_MARGIN``). The cubic is evaluated in an offset form whose
+        rounding is relative to the motion of the edge (:func:`_depth`): the
+        result is that of the bisection in exact arithmetic to a few 1e-16,
+        where the bisection on :meth:`edges` in floating point is off by up to
+        eps |edge| / |d edge/d lam| (1e-12 for an edge moving 1e-4 of its
+        distance from the centre in the step).
         """
         x = np.asarray(x, dtype=float)
-        lo = np.full(x.shape, self.lam_lo)
         if self._kind == "symmetric":
             P0, P1 = self.loads0.P, self.loads1.P
             Px = self.problem.load(np.abs(x))
             return np.clip((Px - P0) / (P1 - P0), self.lam_lo, 1.0)
-        hi = np.ones(x.shape)
-        for _ in range(BISECTION_STEPS):
+        if self._kind == "hermite":
+            lam = self._hermite_arrival(x, side)
+        else:
+            lo, hi = self._bisect(x, side, np.full(x.shape, self.lam_lo), np.ones(x.shape), BISECTION_STEPS)
+            lam = 0.5 * (lo + hi)
+        if self._start is None:
+            left, right = self.edges(np.array(self.lam_lo))
+            self._start = float(left), float(right)
+        left, right = self._start
+        return np.where((x > left) & (x < right), self.lam_lo, lam)
+
+    def _bisect(self, x, side, lo, hi, steps):
+        """``steps`` bisection steps on "x inside at lam" (the reference algorithm of :meth:`arrival`)."""
+        for _ in range(steps):
             mid = 0.5 * (lo + hi)
             left, right = self.edges(mid)
             inside = (x > left) if side < 0 else (x < right)
             hi = np.where(inside, mid, hi)
             lo = np.where(inside, lo, mid)
-        lam = 0.5 * (lo + hi)
-        left, right = self.edges(np.full(x.shape, self.lam_lo))
-        already = (x > left) & (x < right)
-        return np.where(already, self.lam_lo, lam)
+        return lo, hi
+
+    # -- hermite: one side of the cubic -----------------------------------------------
+    def _side(self, side: int):
+        """(v0, h1 - h0, v1) of the ``side`` edge, its start h0, and its extrema near [lam_lo, 1]."""
+        got = self._sides.get(side)
+        if got is None:
+            i = 0 if side < 0 else 1
+            h0, v0, h1, v1 = (float(self._h0[i]), float(self._v0[i]), float(self._h1[i]), float(self._v1[i]))
+            dh = h1 - h0
+            # e'(s) = a s^2 + b s + c
+            a, b, c = 3.0 * (v0 + v1) - 6.0 * dh, 6.0 * dh - 4.0 * v0 - 2.0 * v1, v0
+            ext = np.array([e for e in _quadratic_roots(a, b, c)
+                            if self.lam_lo - EXTREMUM_MARGIN < e < 1.0 + EXTREMUM_MARGIN])
+            got = self._sides[side] = ((v0, dh, v1), h0, ext)
+        return got
+
+    def _hermite_arrival(self, x: np.ndarray, side: int) -> np.ndarray:
+        (v0, dh, v1), h0, ext = self._side(side)
+        r = np.ascontiguousarray(side * (h0 - x), dtype=float).ravel()
+        lam = _hermite_arrivals(side * v0, side * dh, side * v1, r, self.lam_lo, ext,
+                                EXTREMUM_MARGIN, BISECTION_STEPS, NEWTON_STEPS)
+        return lam.reshape(x.shape)
+
+    def _gap(self, x: np.ndarray, lam_x: np.ndarray, back: np.ndarray, side: int) -> np.ndarray:
+        """x - e(lam_x - back) of the ``side`` hermite edge e, shape (n, k), lam_x the arrival of x.
+
+        As (x - e(lam_x)) + back D, D the divided difference of the cubic
+        between lam_x - back and lam_x, with x - e(lam_x) = 0 where lam_x is a
+        crossing: relative accuracy up to lam_x, where ``edges`` (and
+        lam_x - back rounded) leave an error of eps |e| that the arrival
+        integral (inverse square root at lam_x) felt at 1e-6.
+        """
+        (v0, dh, v1), h0, _ = self._side(side)
+        c2, c3 = 3.0 * dh - 2.0 * v0 - v1, v0 - 2.0 * dh + v1
+        a = lam_x[:, None]
+        b = a - back
+        D = v0 + c2 * (a + b) + c3 * (a * a + a * b + b * b)
+        at = side * (h0 - x)
+        gx = _depth(side * v0, side * dh, side * v1, at, lam_x)
+        noise = 16.0 * np.finfo(float).eps * (np.abs(at) + abs(v0) + abs(dh) + abs(v1))
+        gx = np.where(np.abs(gx) <= noise, 0.0, gx)
+        return (-side * gx)[:, None] + back * D
+
+
+def _depth(v0, dh, v1, r, s):
+    """g(s) = side (e(s) - x) of a hermite edge, given r = side (h0 - x) and side (v0, h1 - h0, v1).
+
+    The offset form h0 + h10 v0 + h01 (h1 - h0) + h11 v1 of the edge: its
+    rounding error is relative to the motion of the edge, not to the edge (the
+    form of :meth:`EdgePath.edges` puts the crossing of an edge that moves
+    1e-4 of its distance from the centre in a band of ~1e-12 in lam).
+    """
+    t = 1.0 - s
+    return r + s * (t * t * v0 + s * ((3.0 - 2.0 * s) * dh - t * v1))
+
+
+def _slope(v0, dh, v1, s):
+    """dg/ds of :func:`_depth`."""
+    return 6.0 * s * (1.0 - s) * dh + (s - 1.0) * (3.0 * s - 1.0) * v0 + s * (3.0 * s - 2.0) * v1
+
+
+_depth_c = numba.njit(cache=True)(_depth)
+_slope_c = numba.njit(cache=True)(_slope)
+
+
+@numba.njit(cache=True)
+def _hermite_arrivals(v0, dh, v1, r, lam_lo, ext, margin, steps, newton):  # pragma: no cover - compiled
+    """The limit of ``steps`` bisection steps on "g(lam) > 0" over [lam_lo, 1], for each r (see
+    :meth:`EdgePath.arrival`); ``ext`` the extrema of the edge."""
+    out = np.empty(r.size)
+    for i in range(r.size):
+        ri = r[i]
+        lo = lam_lo
+        hi = 1.0
+        k = 0
+        while k < steps:  # the bisection itself while an extremum lies in the bracket
+            held = False
+            for e in ext:
+                if lo < e + margin and hi > e - margin:
+                    held = True
+            if not held:
+                break
+            mid = 0.5 * (lo + hi)
+            if _depth_c(v0, dh, v1, ri, mid) > 0.0:
+                hi = mid
+            else:
+                lo = mid
+            k += 1
+        mid = 0.5 * (lo + hi)
+        if k == steps:
+            out[i] = mid
+            continue
+        if _slope_c(v0, dh, v1, mid) < 0.0:
+            # edge moving inwards: inside below the crossing, so the bisection runs to the end its
+            # first midpoint picks
+            out[i] = lo if _depth_c(v0, dh, v1, ri, mid) > 0.0 else hi
+            continue
+        # edge moving outwards: the crossing, clamped to the bracket
+        glo = _depth_c(v0, dh, v1, ri, lo)
+        ghi = _depth_c(v0, dh, v1, ri, hi)
+        if glo > 0.0:
+            out[i] = lo
+            continue
+        if ghi <= 0.0:
+            out[i] = hi
+            continue
+        lam = lo - glo * (hi - lo) / (ghi - glo)  # secant start, then Newton kept in the bracket
+        if not (lo < lam < hi):
+            lam = mid
+        for _ in range(newton):
+            g = _depth_c(v0, dh, v1, ri, lam)
+            if g == 0.0:  # on the crossing: the bisection's limit is lam itself
+                break
+            if g > 0.0:
+                hi = lam
+            else:
+                lo = lam
+            new = lam - g / _slope_c(v0, dh, v1, lam)
+            if not (lo < new < hi):
+                new = 0.5 * (lo + hi)
+            step = abs(new - lam)
+            lam = new
+            if step <= 2e-16 or hi - lo <= 4e-16:
+                break
+        out[i] = lam
+    return out
+
+
+def _quadratic_roots(a: float, b: float, c: float) -> list[float]:
+    """Real roots of a s^2 + b s + c (the stable pair of formulas; a linear or constant one too)."""
+    if a == 0.0:
+        return [-c / b] if b != 0.0 else []
+    disc = b * b - 4.0 * a * c
+    if disc < 0.0:
+        return []
+    q = -0.5 * (b + math.copysign(math.sqrt(disc), b))
+    return sorted([q / a, c / q] if q != 0.0 else [0.0])
 
 
 def _edge_rates(sol: NormalSolution, dP: float, dM: float) -> np.ndarray:
@@ -184,8 +355,8 @@ def _edge_rates(sol: NormalSolution, dP: float, dM: float) -> np.ndarray:
     return np.array([-2.0 * c_left / k_left, 2.0 * c_right / k_right])
 
 
-def arrival_strains(path: EdgePath, x: np.ndarray, side: int, compliance: float
-                    ) -> tuple[np.ndarray, np.ndarray]:
+def arrival_strains(path: EdgePath, x: np.ndarray, side: int, compliance: float, fractions: bool = False
+                    ) -> tuple[np.ndarray, np.ndarray] | tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Strain locked in by the stuck increments of the step, and by a unit gauge force.
 
     Parameters
@@ -195,6 +366,8 @@ def arrival_strains(path: EdgePath, x: np.ndarray, side: int, compliance: float
         Points arriving at the ``side`` edge (-1 left, +1 right) during the step.
     compliance : float
         A.
+    fractions : bool
+        Also return the arrival fractions lam_x (``path.arrival(x, side)``, computed here anyway).
 
     Returns
     -------
@@ -203,21 +376,32 @@ def arrival_strains(path: EdgePath, x: np.ndarray, side: int, compliance: float
     gauge : ndarray, shape (n,)
         int A sgn(s) / (pi sqrt(s^2 - d^2)) dlam over the same range (per unit of
         shear force added uniformly over the step).
+    lam_x : ndarray, shape (n,)
+        Only with ``fractions``: the fraction of the step at which each point arrives.
     """
     x = np.asarray(x, dtype=float)
     if x.size == 0:
-        return np.zeros(0), np.zeros(0)
+        return (np.zeros(0), np.zeros(0), np.zeros(0)) if fractions else (np.zeros(0), np.zeros(0))
     l0, l1 = path.loads0, path.loads1
     dQ, dS = l1.Q - l0.Q, l1.sigma - l0.sigma
     lam_x = path.arrival(x, side)
     span = lam_x - path.lam_lo
-    lam = lam_x[:, None] - span[:, None] * _U**2  # (n, k)
+    back = span[:, None] * _U**2
+    lam = lam_x[:, None] - back  # (n, k)
     left, right = path.edges(lam)
-    root = np.sqrt(np.abs((x[:, None] - left) * (x[:, None] - right)))
+    gl, gr = x[:, None] - left, x[:, None] - right
+    if path._kind == "hermite":
+        if side < 0:
+            gl = path._gap(x, lam_x, back, side)
+        else:
+            gr = path._gap(x, lam_x, back, side)
+    root = np.sqrt(np.abs(gl * gr))
     s = x[:, None] - 0.5 * (left + right)
     weight = 2.0 * span[:, None] * _U * _W
     with np.errstate(divide="ignore", invalid="ignore"):
         kernel = np.where(root > 0.0, weight / root, 0.0) * (compliance * side)
     increment = kernel @ np.full(_U.shape, dQ / math.pi) + (kernel * s).sum(axis=1) * (0.25 * dS)
     gauge = kernel.sum(axis=1) / math.pi
+    if fractions:
+        return increment, gauge, lam_x
     return increment, gauge

@@ -1,0 +1,211 @@
+"""Kernels of the general solver: arrival fractions on the edge path, and the Toeplitz lattice algebra.
+
+EdgePath.arrival against the bisection it replaces, run here in exact
+(rational) arithmetic on the same cubic, and in floating point on
+``EdgePath.edges`` (the old algorithm, whose own rounding band
+eps |edge| / |d edge / d lam| bounds the difference); arrival_strains against
+its quadrature rule evaluated in 40 digits. ToeplitzLattice products and
+solves against dense matrices.
+"""
+from __future__ import annotations
+
+import math
+from fractions import Fraction
+
+import numpy as np
+import pytest
+
+from halfslip.geometry import NormalProblem
+from halfslip.solvers import _general_path as gp
+from halfslip.solvers._general_path import EdgePath, arrival_strains
+from halfslip.state import Loads
+
+from helpers import A, P0, PROFILES
+
+EPS = np.finfo(float).eps
+
+
+# -- arrival fractions --------------------------------------------------------------------------------
+
+
+def _hermite_paths(kind: str, count: int, seed: int, short: bool = False) -> list[EdgePath]:
+    """Hermite edge paths between real normal solutions: P and M changed at random (``short``: by ~1e-3)."""
+    problem = NormalProblem(PROFILES[kind], A)
+    a = problem.solve(P0, 0.0).half_width
+    rng = np.random.default_rng(seed)
+    paths = []
+    while len(paths) < count:
+        P0_, M0 = P0 * rng.uniform(0.5, 1.5), rng.uniform(-0.2, 0.2) * P0 * a
+        if short:
+            P1, M1 = P0_ * (1.0 + rng.uniform(-2e-3, 2e-3)), M0 + rng.uniform(-2e-3, 2e-3) * P0 * a
+        else:
+            P1, M1 = P0 * rng.uniform(0.5, 1.5), rng.uniform(-0.2, 0.2) * P0 * a
+        loads0, loads1 = Loads(P0_, 0.0, M0, 0.0), Loads(P1, 0.0, M1, 0.0)
+        path = EdgePath(problem, problem.solve(P0_, M0), problem.solve(P1, M1), loads0, loads1)
+        assert path._kind == "hermite"
+        paths.append(path)
+    return paths
+
+
+def _overshooting(path: EdgePath, factor: float) -> EdgePath:
+    """The same path with end rates ``factor`` x the chord: each edge turns inside the step."""
+    chord = path._h1 - path._h0
+    path._v0 = factor * chord
+    path._v1 = factor * chord
+    path._sides.clear()
+    return path
+
+
+def _exact_edge(path: EdgePath, side: int):
+    i = 0 if side < 0 else 1
+    h0, v0, h1, v1 = (Fraction(float(c[i])) for c in (path._h0, path._v0, path._h1, path._v1))
+
+    def edge(s: Fraction) -> Fraction:
+        return (1 + 2 * s) * (1 - s) ** 2 * h0 + s * (1 - s) ** 2 * v0 + s * s * (3 - 2 * s) * h1 + s * s * (s - 1) * v1
+
+    return edge
+
+
+def _exact_bisection(path: EdgePath, x: np.ndarray, side: int) -> np.ndarray:
+    """The reference: 60 bisection steps on "x inside at lam" in exact arithmetic on the hermite cubic."""
+    edge, other = _exact_edge(path, side), _exact_edge(path, -side)
+    lam_lo = Fraction(path.lam_lo)
+    out = []
+    for xf in x:
+        xq = Fraction(float(xf))
+        lo, hi = lam_lo, Fraction(1)
+        for _ in range(60):
+            mid = (lo + hi) / 2
+            inside = xq > edge(mid) if side < 0 else xq < edge(mid)
+            lo, hi = (lo, mid) if inside else (mid, hi)
+        lam = (lo + hi) / 2
+        left, right = (edge(lam_lo), other(lam_lo)) if side < 0 else (other(lam_lo), edge(lam_lo))
+        out.append(float(lam_lo if left < xq < right else lam))
+    return np.array(out)
+
+
+def _float_bisection(path: EdgePath, x: np.ndarray, side: int) -> np.ndarray:
+    """The old algorithm: the same bisection on ``path.edges`` in floating point."""
+    lo, hi = np.full(x.shape, path.lam_lo), np.ones(x.shape)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        left, right = path.edges(mid)
+        inside = (x > left) if side < 0 else (x < right)
+        lo, hi = np.where(inside, lo, mid), np.where(inside, mid, hi)
+    left, right = path.edges(np.full(x.shape, path.lam_lo))
+    return np.where((x > left) & (x < right), path.lam_lo, 0.5 * (lo + hi))
+
+
+def _test_points(path: EdgePath, side: int, rng) -> np.ndarray:
+    """Points the ``side`` edge sweeps, points inside at the start, exactly on the end edge and beyond it."""
+    i = 0 if side < 0 else 1
+    lam = np.linspace(0.0, 1.0, 2001)
+    left, right = path.edges(lam)
+    edge = left if side < 0 else right
+    outer = edge.min() if side < 0 else edge.max()  # outermost reach of the edge in the step
+    start, end = float(path._h0[i]), float(path._h1[i])
+    centre = 0.5 * (path._h0[0] + path._h0[1])
+    swept = rng.uniform(min(start, outer), max(start, outer), 24)
+    return np.concatenate((swept, [end, start, 0.5 * (start + centre), centre, outer + side * 1e-6 * abs(outer)]))
+
+
+@pytest.mark.parametrize("kind", ["hertz", "punch"])
+@pytest.mark.parametrize("short", [False, True])
+def test_arrival_matches_the_exact_bisection_on_real_hermite_paths(kind, short):
+    rng = np.random.default_rng(7)
+    for path in _hermite_paths(kind, 6, seed=11 if short else 3, short=short):
+        for side in (-1, 1):
+            x = _test_points(path, side, rng)
+            got = path.arrival(x, side)
+            ref = _exact_bisection(path, x, side)
+            assert np.max(np.abs(got - ref)) <= 1e-14, (kind, side, x[np.argmax(np.abs(got - ref))])
+            i = 0 if side < 0 else 1
+            assert got[-5] == pytest.approx(1.0, abs=1e-15) or path._h1[i] * side < path._h0[i] * side
+            assert got[-1] == pytest.approx(1.0, abs=1e-15)  # beyond the reach of the edge: never arrives
+            assert got[-3] == path.lam_lo and got[-2] == path.lam_lo  # inside at the start
+
+
+@pytest.mark.parametrize("factor", [-3.0, 6.0])
+def test_arrival_matches_the_exact_bisection_where_the_edge_turns(factor):
+    """End rates against (-3) or far beyond (6) the chord: every edge has extrema inside the step, and
+    points swept twice arrive where the bisection puts them."""
+    rng = np.random.default_rng(5)
+    for path in _hermite_paths("hertz", 3, seed=21):
+        path = _overshooting(path, factor)
+        for side in (-1, 1):
+            assert path._side(side)[2].size > 0
+            x = _test_points(path, side, rng)
+            got = path.arrival(x, side)
+            ref = _exact_bisection(path, x, side)
+            assert np.max(np.abs(got - ref)) <= 1e-14, (factor, side, x[np.argmax(np.abs(got - ref))])
+
+
+@pytest.mark.parametrize("short", [False, True])
+def test_arrival_agrees_with_the_floating_point_bisection_within_its_rounding_band(short):
+    """The old bisection on ``edges`` is right to eps |edge| / |edge'| only (1e-12 on a short step)."""
+    rng = np.random.default_rng(9)
+    for path in _hermite_paths("hertz", 6, seed=5, short=short):
+        for side in (-1, 1):
+            x = _test_points(path, side, rng)
+            got = path.arrival(x, side)
+            old = _float_bisection(path, x, side)
+            (v0, dh, v1), h0, _ = path._side(side)
+            rate = np.abs(gp._slope(v0, dh, v1, got))
+            scale = np.maximum(np.abs(path._h0).max(), np.abs(path._h1).max())
+            with np.errstate(divide="ignore"):
+                band = 1e-14 + 16.0 * EPS * scale / rate
+            assert np.all(np.abs(got - old) <= band)
+
+
+def test_arrival_strains_returns_the_fractions_only_when_asked():
+    path = _hermite_paths("punch", 1, seed=2)[0]
+    x = np.linspace(path._h0[1], path._h1[1], 9)
+    side = 1 if path._h1[1] > path._h0[1] else -1
+    if side < 0:
+        x = np.linspace(path._h0[0], path._h1[0], 9)
+    two = arrival_strains(path, x, side, A)
+    assert len(two) == 2
+    inc, gauge, lam = arrival_strains(path, x, side, A, fractions=True)
+    assert np.array_equal(inc, two[0]) and np.array_equal(gauge, two[1])
+    assert np.array_equal(lam, path.arrival(x, side))
+    assert [v.shape for v in arrival_strains(path, np.zeros(0), side, A, fractions=True)] == [(0,)] * 3
+    assert len(arrival_strains(path, np.zeros(0), side, A)) == 2
+
+
+@pytest.mark.parametrize("short", [False, True])
+def test_arrival_strains_is_its_quadrature_rule_to_rounding(short):
+    """The gauge integral int_lam_lo^lam_x A/(pi sqrt|(x - L)(x - R)|) dlam through the same 49-point rule,
+    in 40 digits on the exact cubic: the inverse square root at lam_x makes the integral sensitive to
+    x - L there, which ``edges`` carries with an error of eps |L| (1e-6 of the gauge on a short step)."""
+    mp = pytest.importorskip("mpmath")
+    mp.mp.dps = 40
+    rng = np.random.default_rng(4)
+    for path in _hermite_paths("hertz", 2, seed=13, short=short):
+        for side in (-1, 1):
+            i = 0 if side < 0 else 1
+            if side * (path._h1[i] - path._h0[i]) <= 0.0:
+                continue  # this edge recedes: nothing arrives
+            x = path._h0[i] + (path._h1[i] - path._h0[i]) * rng.uniform(0.05, 0.95, 3)
+            _, gauge, lam_x = arrival_strains(path, x, side, A, fractions=True)
+            coef = [[mp.mpf(float(c[j])) for c in (path._h0, path._v0, path._h1, path._v1)] for j in (0, 1)]
+
+            def edge(j, s):
+                h0, v0, h1, v1 = coef[j]
+                return (1 + 2 * s) * (1 - s) ** 2 * h0 + s * (1 - s) ** 2 * v0 + s * s * (3 - 2 * s) * h1 \
+                    + s * s * (s - 1) * v1
+
+            for xk, lk, gk in zip(x, lam_x, gauge):
+                X = mp.mpf(float(xk))
+                lx = mp.findroot(lambda s: edge(i, s) - X, mp.mpf(float(lk)))
+                assert abs(float(lx) - lk) <= 1e-15
+                ref = 0
+                for u, w in zip(gp._U, gp._W):
+                    u, w = mp.mpf(float(u)), mp.mpf(float(w))
+                    s = lx - lx * u * u
+                    # x - e_i(s) from the exact difference e_i(lx) - e_i(s) (lx - s = lx u^2 exactly)
+                    near = (edge(i, lx) - edge(i, s)) if u > 0 else 0
+                    root = mp.sqrt(abs(near * (X - edge(1 - i, s))))
+                    if root > 0:
+                        ref += 2 * lx * u * w / root
+                ref = float(ref * A * side / mp.pi)
+                assert gk == pytest.approx(ref, rel=1e-12, abs=0.0)
