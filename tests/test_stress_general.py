@@ -860,10 +860,11 @@ def test_step_splitting_after_slip(kind, nodes, steps):
 
 
 #: A tiny first step (or the graded sequence) after a Cattaneo slip against the single step,
-#: at 128 nodes (contact widths), set from the rounded punch: measured tiny_first 2.8e-7,
-#: tiny_2e-9 2.8e-7, graded 5.3e-7 (1.5e-7 .. 1.0e-6 at 256, 3.3e-7 .. 3.6e-7 at 512): the
-#: sub-steps of the remaining step differ from those of the single step.
-TINY_AFTER_SLIP_TOL = 1e-6
+#: at 128 nodes (contact widths), set from the rounded punch: measured tiny_first 4.9e-7,
+#: tiny_2e-9 4.9e-7, graded 1.3e-6 (5e-14 / 1e-13 / 8.6e-9 at 256, 6e-14 / 1e-13 / 1.9e-7 at 512):
+#: the sub-steps of the remaining step (one cell of arrival each) fall differently from those of
+#: the single step; tolerance 2.3x the largest.
+TINY_AFTER_SLIP_TOL = 3e-6
 
 
 @pytest.mark.parametrize("kind", ["hertz", "punch"])
@@ -1182,7 +1183,7 @@ def check_slip_direction(solver, prev, state):
     stick only for a reversed increment beyond general.FLIP_TOL = 1e-10 of A f max cap h (the
     slip a cell's bound shear makes), so 1e-9 of that, plus the rounding of G (4 eps abs(G));
     measured: no reversed increment on partial-slip steps. Only for a step taken in one
-    piece (``solver.travel = solver.stick_travel = 0``): in a sub-stepped step, status is the
+    piece (``travel = stick_travel = 0``, ``arrivals = False``): in a sub-stepped step, status is the
     last sub-step's and G changes over all of them.
     """
     mem, old = state.memory, prev.memory
@@ -1233,7 +1234,7 @@ def random_history(draw, kind):
 def run_random(kind, nodes, path, whole):
     """March ``path``, checking every step; ``whole``: steps in one piece (no sub-steps), with the
     slip direction of every cell checked."""
-    problem, solver = make(kind, nodes, **({"travel": 0.0, "stick_travel": 0.0} if whole else {}))
+    problem, solver = make(kind, nodes, **({"travel": 0.0, "stick_travel": 0.0, "arrivals": False} if whole else {}))
     state = solver.initial_state()
     for i, loads in enumerate(path):
         prev = state
@@ -1296,7 +1297,7 @@ def test_gross_sliding_slips_with_the_shear():
     for kind, path in (("punch", [(P0, 0.0), (P0, 1.5 * F * P0)]),
                        ("hertz", [(P0, 0.0), (P0, 0.5 * F * P0), (1.2 * P0, 1.5 * F * P0, 2.0, 1e7)]),
                        ("hertz", [(P0, F * P0)])):
-        problem, solver = make(kind, 64, travel=0.0, stick_travel=0.0)
+        problem, solver = make(kind, 64, travel=0.0, stick_travel=0.0, arrivals=False)
         state = solver.initial_state()
         for i, loads in enumerate(path):
             prev = state
@@ -1316,5 +1317,5 @@ def test_contact_formed_near_gross_sliding_with_a_moment(nodes):
     the step returned q, shift and dissipation NaN with converged = False (residual NaN);
     also with M = -0.2 N; at 512 nodes it converged (two stick intervals).
     """
-    problem, solver = make("hertz", nodes, travel=0.0, stick_travel=0.0)
+    problem, solver = make("hertz", nodes, travel=0.0, stick_travel=0.0, arrivals=False)
     walk(solver, [(1e4, -0.99999 * F * 1e4, -0.4174978304517685, 0.0)])

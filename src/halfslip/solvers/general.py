@@ -158,6 +158,18 @@ class GeneralMemory:
 
 
 @dataclass(frozen=True)
+class _Context:
+    """What both lattices of one step share: the end's normal solution, the fine cell, the edge path
+    (None unless the contact grows), the pressure integrals, whether the normal problem was solved."""
+
+    N1: NormalSolution
+    h: float
+    path: EdgePath | None
+    load: "_Load"
+    normal_changed: bool
+
+
+@dataclass(frozen=True)
 class _Outcome:
     """One lattice's step: the new memory and what the step did."""
 
@@ -165,6 +177,7 @@ class _Outcome:
     shift: float
     dissipation: float
     stick: tuple
+    widest: tuple
     regime: Regime
     slipped: bool
     iterations: int
@@ -195,6 +208,9 @@ class GeneralSolver(TangentialSolver):
     stick_travel : float, optional
         Largest travel of a stick edge over a slipping (sub-)step, as a
         fraction of the contact width (0: never). Default DEFAULT_STICK_TRAVEL.
+    arrivals : bool
+        Sub-step a partially slipping step whose contact grows so that no edge
+        advances more than one cell per sub-step (:meth:`_pieces`).
 
     Attributes
     ----------
@@ -208,7 +224,7 @@ class GeneralSolver(TangentialSolver):
 
     def __init__(self, problem: NormalProblem, friction: float, nodes: int = DEFAULT_NODES, stations=None,
                  width: float | None = None, estimate: bool = True, travel: float | None = None,
-                 stick_travel: float | None = None):
+                 stick_travel: float | None = None, arrivals: bool = True):
         self.problem = problem
         self.f = float(friction)
         if not self.f > 0.0:
@@ -223,6 +239,7 @@ class GeneralSolver(TangentialSolver):
         self.datum = problem.profile.length_scale
         self.stations = None if stations is None else np.asarray(stations, dtype=float)
         self.estimate = bool(estimate)
+        self.arrivals = bool(arrivals)
         self.travel = DEFAULT_TRAVEL if travel is None else float(travel)
         self.stick_travel = DEFAULT_STICK_TRAVEL if stick_travel is None else float(stick_travel)
         if not (math.isfinite(self.stick_travel) and self.stick_travel >= 0.0):
@@ -244,45 +261,37 @@ class GeneralSolver(TangentialSolver):
     def step(self, state: ContactState, t1: float, loads1: Loads) -> tuple[ContactState, StepReport]:
         """Advance ``state`` to ``t1`` and ``loads1`` along the straight line in (P, Q, M, sigma).
 
-        A step that slipped while a contact edge travelled further than
-        ``travel`` of the contact width, or a stick edge further than
-        ``stick_travel``, is taken again in equal sub-steps along the same line
-        (at most MAX_SUBSTEPS): the answer of a slipping step depends on the
-        path within it when the contact changes (the dissipation error is
-        second order in the step, measured against the exact method) or the
-        loading is not proportional (docs/general_solver.md).
+        A step that slipped is taken again in equal sub-steps along the same
+        line when its answer depends on the path within it (:meth:`_pieces`
+        says when and how many); the step's error estimate is that of its end.
         """
         self.counters["steps"] += 1
         loads1 = Loads(*(float(v) for v in loads1))
         t1 = float(t1)
-        new, report = self._single(state, t1, loads1)
-        if not report.slipped or new.memory.normal is None:
-            return new, report
-        N0, N1 = state.memory.normal, new.memory.normal
-        W = N1.right - N1.left
-        # a contact forming in the step grows over its whole width: the arrivals' stuck increments (M1) miss
-        # any slip on the way (measured: a punch step from zero with an interior slip zone 7 % of the width
-        # wide in one step sticks fully in 4 sub-steps and in the IC reference)
-        moved = 1.0 if N0 is None else max(abs(N1.left - N0.left), abs(N1.right - N0.right)) / W
-        pieces = math.ceil(moved / self.travel) if self.travel > 0.0 else 1
-        if self.stick_travel > 0.0 and report.regime == Regime.PARTIAL_SLIP and np.isfinite(state.stick_left):
-            # a stick edge that travels far in one step: the answer depends on the path within the step
-            # (non-proportional loading: measured on the random histories, docs/general_solver.md)
-            travelled = max(abs(new.stick_left - state.stick_left), abs(new.stick_right - state.stick_right)) / W
-            pieces = max(pieces, math.ceil(travelled / self.stick_travel))
-        pieces = min(MAX_SUBSTEPS, pieces)
+        if loads1 == state.loads or not loads1.P > 0.0:
+            return self._single(state, t1, loads1, state.loads)[:2]
+        ctx, fine = self._fine(state, loads1)
+        pieces = self._pieces(state, ctx, fine)
         if pieces <= 1:
-            return new, report
+            return self._finish(state, t1, loads1, ctx, fine, state.loads)[:2]
         self.counters["substeps"] += pieces
         loads0, t0 = state.loads, state.t
         # a step from separation: the sub-steps share the part of the step in contact
-        lo = 0.0 if N0 is not None or loads0.P >= 0.0 else loads0.P / (loads0.P - loads1.P)
+        lo = 0.0 if state.memory.normal is not None or loads0.P >= 0.0 else loads0.P / (loads0.P - loads1.P)
         reports = []
-        sub = state
+        spread = 0.0
+        sub = shadow_from = state
         for k in range(1, pieces + 1):
             lam = lo + (1.0 - lo) * k / pieces
             at = Loads(*(a + lam * (b - a) for a, b in zip(loads0, loads1))) if k < pieces else loads1
-            sub, rep = self._single(sub, t0 + lam * (t1 - t0) if k < pieces else t1, at)
+            # the shadow lattice (twice the cell) takes every other sub-step: its arrivals are resolved
+            # in proportion to its cells, so that the estimate sees the arrivals' error as well
+            shadow = k % 2 == 0 or k == pieces
+            sub, rep, apart = self._single(sub, t0 + lam * (t1 - t0) if k < pieces else t1, at,
+                                           shadow_from.loads if shadow else None)
+            if shadow:
+                shadow_from = sub
+                spread = max(spread, apart)
             reports.append(rep)
         last = reports[-1]
         # the gross-sliding and separation messages speak of the step's end loads (a sub-step may slide or be
@@ -294,19 +303,63 @@ class GeneralSolver(TangentialSolver):
                                converged=all(r.converged for r in reports),
                                residual=max(r.residual for r in reports),
                                iterations=sum(r.iterations for r in reports),
-                               error_estimate=max((r.error_estimate for r in reports), default=math.nan))
+                               error_estimate=_at_least(last.error_estimate, spread))
 
-    def _single(self, state: ContactState, t1: float, loads1: Loads) -> tuple[ContactState, StepReport]:
-        """One step, not subdivided."""
+    def _pieces(self, state: ContactState, ctx: "_Context", fine: "_Outcome") -> int:
+        """Sub-steps for a step whose single solve is ``fine`` (1: keep it).
+
+        * Arrivals while part of the contact slips: the arrivals' locked
+          displacements come from the stuck increments (M1) of a fully stuck
+          contact, which a partial slip does not have; sub-steps in which every
+          contact edge advances at most one cell make that error first order in
+          the cell, as the lattice's (as the IC reference, which splits its steps
+          at every arrival). Measured on the random histories at 1024 nodes
+          (docs/general_solver.md): stick edges 95th percentile 1.6e-3 -> 3e-4 of
+          the width (Hertz), 7.5e-4 -> 3.3e-4 (punch).
+        * A contact edge travelling more than ``travel`` of the width in a
+          slipping step, or a stick edge more than ``stick_travel``: the
+          answer depends on the path within the step (the dissipation error is
+          second order in the step, measured against the exact method), at most
+          MAX_SUBSTEPS.
+        * A contact forming in a step that slips: its arrivals' stuck
+          increments miss any slip on the way (a punch step from zero had a
+          7 % interior slip zone that four sub-steps and the IC reference do not).
+        """
+        if not fine.slipped:
+            return 1
+        N0, N1 = state.memory.normal, ctx.N1
+        W = N1.right - N1.left
+        moved = 1.0 if N0 is None else max(abs(N1.left - N0.left), abs(N1.right - N0.right)) / W
+        pieces = math.ceil(moved / self.travel) if self.travel > 0.0 else 1
+        if self.stick_travel > 0.0 and fine.regime == Regime.PARTIAL_SLIP and np.isfinite(state.stick_left):
+            travelled = max(abs(fine.stick[0] - state.stick_left), abs(fine.stick[1] - state.stick_right)) / W
+            pieces = max(pieces, math.ceil(travelled / self.stick_travel))
+        pieces = min(MAX_SUBSTEPS, pieces)
+        if self.arrivals and fine.regime == Regime.PARTIAL_SLIP and N0 is not None:
+            grew = max(N0.left - N1.left, N1.right - N0.right, 0.0) / ctx.h
+            pieces = max(pieces, math.ceil(grew))
+        return pieces
+
+    def _single(self, state: ContactState, t1: float, loads1: Loads,
+                shadow_from: Loads | None) -> tuple[ContactState, StepReport, float]:
+        """One step, not subdivided; the shadow lattice steps from ``shadow_from`` (None: it waits). Returns
+        the state, the report and how far apart the two lattices' widest stick intervals are (/ W)."""
         loads0 = state.loads
         mem = state.memory
         if loads1 == loads0:
             regime = Regime.SEPARATED if mem.normal is None else Regime.STICK
             new = ContactState(float(t1), loads0, state.contact_left, state.contact_right, state.contact_left,
                                state.contact_right, state.shift, state.dissipation, mem)
-            return new, StepReport(regime, False, False, "")
+            return new, StepReport(regime, False, False, ""), 0.0
         if not loads1.P > 0.0:
-            return self._separate(state, t1, loads1)
+            return *self._separate(state, t1, loads1), 0.0
+        ctx, fine = self._fine(state, loads1)
+        return self._finish(state, t1, loads1, ctx, fine, shadow_from)
+
+    def _fine(self, state: ContactState, loads1: Loads) -> tuple["_Context", "_Outcome"]:
+        """The normal solution at ``loads1`` and the step on the fine lattice (P1 > 0)."""
+        loads0 = state.loads
+        mem = state.memory
         normal_changed = mem.normal is None or (loads1.P, loads1.M) != (loads0.P, loads0.M)
         if normal_changed:
             N1 = self.problem.solve(loads1.P, loads1.M)
@@ -316,27 +369,59 @@ class GeneralSolver(TangentialSolver):
         h = mem.spacing
         if not math.isfinite(h):
             h = (self.width if self.width is not None else N1.right - N1.left) / self.nodes
-        path = None
-        if normal_changed and (mem.normal is None or N1.left < mem.normal.left or N1.right > mem.normal.right):
-            path = EdgePath(self.problem, mem.normal, N1, loads0, loads1)
-            self.counters["normal_solves"] += path.solves
+        path = self._path(mem.normal, N1, loads0, loads1)
         load = _Load(N1, h, self._kinks, graded=self._graded_kinks)
-        fine = self._take(mem, h, loads0, loads1, N1, path, load)
+        ctx = _Context(N1, h, path, load, normal_changed)
+        return ctx, self._take(mem, h, loads0, loads1, N1, path, load)
+
+    def _path(self, N0: NormalSolution | None, N1: NormalSolution, loads0: Loads, loads1: Loads):
+        """The edge path of a step whose contact grows beyond ``N0`` (None otherwise)."""
+        if (loads1.P, loads1.M) == (loads0.P, loads0.M) and N0 is not None:
+            return None
+        if N0 is not None and N1.left >= N0.left and N1.right <= N0.right:
+            return None
+        path = EdgePath(self.problem, N0, N1, loads0, loads1)
+        self.counters["normal_solves"] += path.solves
+        return path
+
+    def _finish(self, state: ContactState, t1: float, loads1: Loads, ctx: "_Context", fine: "_Outcome",
+                shadow_from: Loads | None) -> tuple[ContactState, StepReport, float]:
+        """The shadow lattice's step (from ``shadow_from``), the error estimate, the new state and report,
+        and the distance of the two lattices' widest stick intervals (/ W; 0 without the shadow).
+
+        The estimate of the state is the distance of the two lattices' outermost
+        stick points. A sub-stepped step reports the larger of it and the
+        largest distance of the widest intervals over its sub-steps: the
+        edges sweep through their cells, and where they fall in a cell sets
+        their error (0.1-0.25 of a cell), so the two lattices can agree by
+        chance at the end (J1 at 256 nodes: error 3.9e-4 of W, end estimate
+        5.7e-5); the widest intervals, not the outermost points, because stick
+        islands of a cell or two at an advancing edge come and go between
+        sub-steps (the outermost distance reached 0.24 of W in sub-steps whose
+        end states agree to 1e-4).
+        """
+        loads0 = state.loads
+        mem = state.memory
+        N1, h = ctx.N1, ctx.h
+        W = N1.right - N1.left
         error = math.nan
-        coarse = None
-        if self.estimate:
+        spread = 0.0
+        coarse = mem.coarse
+        if self.estimate and shadow_from is not None:
             cmem = mem.coarse
             if cmem is None or not math.isfinite(cmem.spacing):
                 cmem = _empty(2.0 * h, None, state.shift)
-            rough = self._take(cmem, cmem.spacing, loads0, loads1, N1, path, load)
+            path = ctx.path if shadow_from == loads0 else self._path(cmem.normal, N1, shadow_from, loads1)
+            rough = self._take(cmem, cmem.spacing, shadow_from, loads1, N1, path, ctx.load)
             coarse = rough.memory
-            W = N1.right - N1.left
             error = max(_apart(a, b) for a, b in zip(fine.stick, rough.stick)) / W
+            spread = max(_apart(a, b) for a, b in zip(fine.widest, rough.widest)) / W
+        elif not self.estimate:
+            coarse = None
         if mem.normal is not None and fine.regime != Regime.GROSS_SLIDING:
             # a slip zone narrower than a cell: (S1) fails at an advancing edge whose end cell stuck
-            unresolved = _unresolved_edges(N1, loads0, loads1, self.f, fine.memory.status)
-            if unresolved:
-                error = max(error if math.isfinite(error) else 0.0, h / (N1.right - N1.left))
+            if _unresolved_edges(N1, loads0, loads1, self.f, fine.memory.status):
+                error = max(error if math.isfinite(error) else 0.0, h / W)
         memory = dataclasses.replace(fine.memory, error=error, coarse=coarse)
         new = ContactState(float(t1), loads1, N1.left, N1.right, fine.stick[0], fine.stick[1], fine.shift,
                            state.dissipation + fine.dissipation, memory)
@@ -345,8 +430,8 @@ class GeneralSolver(TangentialSolver):
         if not converged:
             message = "; ".join(m for m in (message, f"active set not converged (check residual {fine.residual:.3g} "
                                                       f"x tolerance)") if m)
-        return new, StepReport(fine.regime, fine.slipped, normal_changed, message, converged=converged,
-                               residual=fine.residual, iterations=fine.iterations, error_estimate=error)
+        return new, StepReport(fine.regime, fine.slipped, ctx.normal_changed, message, converged=converged,
+                               residual=fine.residual, iterations=fine.iterations, error_estimate=error), spread
 
     # -- one lattice ----------------------------------------------------------
     def _lattice(self, h: float, n: int) -> ToeplitzLattice:
@@ -435,11 +520,16 @@ class GeneralSolver(TangentialSolver):
                                shift)
         if not np.any(slip):
             regime, edges = Regime.STICK, (N1.left, N1.right)
+            widest = edges
         elif np.all(slip):
             regime, edges = Regime.GROSS_SLIDING, (math.nan, math.nan)
+            widest = edges
         else:
             regime, edges = Regime.PARTIAL_SLIP, _stick_edges(x, q, qmax, status, N1, h)
-        return _Outcome(memory, shift, dissipation, edges, regime, bool(np.any(slip)), iterations, residual, message)
+            a, b = max(_runs(stick), key=lambda r: r[1] - r[0])
+            widest = _run_edges(x, q, qmax, status, N1, h, a, b - 1)
+        return _Outcome(memory, shift, dissipation, edges, widest, regime, bool(np.any(slip)), iterations, residual,
+                        message)
 
     def _active_set(self, lat: ToeplitzLattice, n: int, r: np.ndarray, qmax: np.ndarray, total: float,
                     status: np.ndarray, gscale: float, floor: float = 0.0):
@@ -859,6 +949,11 @@ def _unresolved_edges(N1: NormalSolution, loads0: Loads, loads1: Loads, f: float
         if cell == 0 and (abs(u) >= f * v if v > 0.0 else abs(u) > drive):
             count += 1
     return count
+
+
+def _at_least(estimate: float, spread: float) -> float:
+    """``estimate`` raised to ``spread`` (NaN stays NaN: no shadow)."""
+    return estimate if math.isnan(estimate) else max(estimate, spread)
 
 
 def _apart(u: float, v: float) -> float:
