@@ -78,26 +78,83 @@ class SaveAt:
         return i % self.every == 0 or i == n
 
 
-def field_stations(scene, problem: NormalProblem, points: int) -> np.ndarray:
-    """Evenly spaced stations covering the largest contact of the history, 2 % margin."""
+@dataclass(frozen=True, eq=False)
+class ContactEdges:
+    """Contact edges of a history's distinct loads (P, M) with P > 0, one normal solve each.
+
+    Attributes
+    ----------
+    P, M : ndarray, shape (k,)
+        The distinct (P, M) samples of the history with P > 0 (sorted rows).
+    left, right : ndarray, shape (k,)
+        Contact edges under each of them [m].
+    """
+
+    P: np.ndarray = field(repr=False)
+    M: np.ndarray = field(repr=False)
+    left: np.ndarray = field(repr=False)
+    right: np.ndarray = field(repr=False)
+
+    @property
+    def extent(self) -> tuple[float, float]:
+        """(leftmost left edge, rightmost right edge) over every sample [m]."""
+        return float(np.min(self.left)), float(np.max(self.right))
+
+    @property
+    def widest(self) -> float:
+        """The widest contact right - left over every sample [m]."""
+        return float(np.max(self.right - self.left))
+
+
+def contact_edges(scene, problem: NormalProblem) -> ContactEdges | None:
+    """Solve the normal problem once per distinct (P, M) sample of the history with P > 0.
+
+    A periodic history repeats its samples, so this is about one cycle's worth
+    of solves however many cycles it has. None when the history never presses
+    the bodies together.
+    """
+    h = scene.history
+    loads = np.column_stack([np.asarray(h.P, float), np.asarray(h.M, float)])
+    loads = loads[loads[:, 0] > 0.0]
+    if not loads.size:
+        return None
+    loads = np.unique(loads, axis=0)
+    left, right = np.empty(len(loads)), np.empty(len(loads))
+    for k, (P, M) in enumerate(loads):
+        sol = problem.solve(P, M)
+        left[k], right[k] = sol.left, sol.right
+    return ContactEdges(loads[:, 0], loads[:, 1], left, right)
+
+
+def _closed_form(scene) -> bool:
+    """A symmetric profile under M = 0 throughout: the contact is [-a(P), a(P)], no solve needed."""
+    return bool(scene.profile.symmetric and not np.any(scene.history.M))
+
+
+def field_stations(scene, problem: NormalProblem, points: int, edges: ContactEdges | None = None) -> np.ndarray:
+    """Evenly spaced stations covering the largest contact of the history, 2 % margin.
+
+    ``edges`` (:func:`contact_edges` of the same scene and problem) saves the
+    solves when the caller has it already; without it the profile is solved here
+    (unless it is symmetric under M = 0: then a(max P) is the closed form).
+    """
     h = scene.history
     P_max = float(np.max(h.P)) if h.P.size else 0.0
     if P_max <= 0:
         return np.linspace(-1.0, 1.0, points) * problem.profile.length_scale
-    if scene.profile.symmetric and not np.any(h.M):
+    if _closed_form(scene):
         half = float(problem.half_width(P_max))
         return np.linspace(-1.02 * half, 1.02 * half, points)
-    left, right = np.inf, -np.inf
-    for P, M in zip(h.P, h.M):
-        if P > 0:
-            sol = problem.solve(P, M)
-            left, right = min(left, sol.left), max(right, sol.right)
+    if edges is None:
+        edges = contact_edges(scene, problem)
+    left, right = edges.extent
     margin = 0.02 * (right - left)
     return np.linspace(left - margin, right + margin, points)
 
 
-def build_method(scene, name: str, problem: NormalProblem, stations: np.ndarray | None):
-    """Instantiate the tangential method ``name`` for ``scene``."""
+def build_method(scene, name: str, problem: NormalProblem, stations: np.ndarray | None,
+                 edges: ContactEdges | None = None):
+    """Instantiate the tangential method ``name`` for ``scene`` (``edges`` as in :func:`field_stations`)."""
     P_max = float(np.max(scene.history.P)) if scene.history.P.size else 0.0
     if name == "exact":
         from .solvers.exact import ExactMemory
@@ -106,30 +163,27 @@ def build_method(scene, name: str, problem: NormalProblem, stations: np.ndarray 
     from .solvers.general import GeneralSolver
 
     return GeneralSolver(problem, scene.friction, scene.solver.nodes, stations=stations,
-                         width=reference_width(scene, problem), travel=scene.solver.edge_travel)
+                         width=reference_width(scene, problem, edges), travel=scene.solver.edge_travel)
 
 
-#: Load samples of the history at which the reference contact width is taken (with the largest P).
-WIDTH_SAMPLES = 64
-
-
-def reference_width(scene, problem: NormalProblem) -> float | None:
-    """The widest contact among the history's largest P and WIDTH_SAMPLES evenly spread samples [m].
+def reference_width(scene, problem: NormalProblem, edges: ContactEdges | None = None) -> float | None:
+    """The widest contact over every distinct (P, M) sample of the history [m].
 
     The general solver's lattice spacing is this width / solver.nodes for the
-    whole run (None when the history never presses the bodies together).
+    whole run (None when the history never presses the bodies together). A
+    symmetric profile under M = 0 needs no solve: the widest contact is
+    2 a(max P). Otherwise the normal problem is solved once per distinct
+    sample (:func:`contact_edges`; ``edges`` as in :func:`field_stations`).
     """
     h = scene.history
-    P, M = np.asarray(h.P, float), np.asarray(h.M, float)
+    P = np.asarray(h.P, float)
     if not np.any(P > 0.0):
         return None
-    idx = np.unique(np.concatenate(([int(np.argmax(P))], np.linspace(0, P.size - 1, WIDTH_SAMPLES).astype(int))))
-    idx = idx[P[idx] > 0.0]
-    widths = []
-    for i in idx:
-        sol = problem.solve(float(P[i]), float(M[i]))
-        widths.append(sol.right - sol.left)
-    return float(max(widths))
+    if _closed_form(scene):
+        return 2.0 * float(problem.half_width(float(np.max(P))))
+    if edges is None:
+        edges = contact_edges(scene, problem)
+    return edges.widest
 
 
 #: A slip zone narrower than this many cells (contact width / nodes) leaves slip and dissipation
@@ -366,9 +420,11 @@ class _Run:
         self.name = name
         self.problem = NormalProblem(scene.profile, scene.material.compliance)
         fields = tuple(f for f in FIELDS if f in scene.output.fields)
-        x = field_stations(scene, self.problem, scene.output.points) if fields else np.zeros(0)
+        # the contact edges of every distinct load, solved once for the stations and the general solver's width
+        edges = None if _closed_form(scene) else contact_edges(scene, self.problem)
+        x = field_stations(scene, self.problem, scene.output.points, edges) if fields else np.zeros(0)
         self.save = SaveAt(scene.output.every, fields, x)
-        self.solver = build_method(scene, name, self.problem, x if "slip" in fields else None)
+        self.solver = build_method(scene, name, self.problem, x if "slip" in fields else None, edges)
         h = scene.history
         self.i = 0
         self.state = self.solver.initial_state(float(h.t[0]))
