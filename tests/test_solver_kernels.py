@@ -209,3 +209,103 @@ def test_arrival_strains_is_its_quadrature_rule_to_rounding(short):
                         ref += 2 * lx * u * w / root
                 ref = float(ref * A * side / mp.pi)
                 assert gk == pytest.approx(ref, rel=1e-12, abs=0.0)
+
+
+# -- the Toeplitz lattice -------------------------------------------------------------------------------
+
+from scipy import fft as sfft  # noqa: E402
+from scipy.linalg import toeplitz  # noqa: E402
+
+from halfslip.solvers import _toeplitz as tz  # noqa: E402
+from halfslip.solvers._toeplitz import ToeplitzLattice  # noqa: E402
+
+SIZE = 300
+H = 1e-6
+
+
+@pytest.fixture(scope="module")
+def lattice():
+    return ToeplitzLattice(H, SIZE, A)
+
+
+def _dense(lat: ToeplitzLattice, n: int) -> np.ndarray:
+    return toeplitz(lat.t[:n])
+
+
+def _rel(a, b) -> float:
+    return float(np.max(np.abs(a - b)) / np.max(np.abs(b)))
+
+
+def test_the_transforms_are_scipy_fft():
+    x = np.random.default_rng(0).standard_normal((36, 3))
+    assert np.allclose(tz._r2c(x), sfft.rfft(x, axis=0), rtol=0, atol=1e-13)
+    X = sfft.rfft(x, axis=0)
+    assert np.allclose(tz._c2r(X, 36), x, rtol=0, atol=1e-14)
+    assert np.allclose(tz._c2r(X[:, 1].copy(), 36), x[:, 1], rtol=0, atol=1e-14)
+
+
+# n sharing one transform length (140, 150), n = size (the circulant needs the kernel beyond the lattice),
+# the smallest
+MATVEC_N = [1, 2, 7, 140, 150, 257, SIZE - 1, SIZE]
+
+
+@pytest.mark.parametrize("n", MATVEC_N)
+def test_matvec_is_the_dense_toeplitz_product(lattice, n):
+    rng = np.random.default_rng(n)
+    T = _dense(lattice, n)
+    for v in (rng.standard_normal(n), rng.standard_normal((n, 3))):
+        got = lattice.matvec(v)
+        assert got.shape == v.shape
+        assert _rel(got, T @ v) <= 1e-14
+
+
+def test_matvec_after_other_sizes_share_a_spectrum(lattice):
+    """The spectra are cached per transform length: a product of one size after another of the same
+    length is still right."""
+    rng = np.random.default_rng(1)
+    fresh = ToeplitzLattice(H, SIZE, A)
+    for n in (150, 140, 149, 141, 150):
+        v = rng.standard_normal(n)
+        assert _rel(fresh.matvec(v), _dense(fresh, n) @ v) <= 1e-14
+
+
+SOLVE_N = [1, 2, 5, tz.DENSE_CELLS, tz.DENSE_CELLS + 1, 200, SIZE]
+
+
+@pytest.mark.parametrize("n", SOLVE_N)
+def test_solve_is_the_dense_solve(lattice, n):
+    rng = np.random.default_rng(100 + n)
+    T = _dense(lattice, n)
+    for w in (rng.standard_normal(n), rng.standard_normal((n, 3))):
+        got = lattice.solve(n, w)
+        assert got.shape == w.shape
+        assert _rel(got, np.linalg.solve(T, w)) <= 1e-12
+
+
+def _stick_solve(lat: ToeplitzLattice, runs, n: int, rhs: np.ndarray) -> np.ndarray:
+    S = np.concatenate([np.arange(a, b) for a, b in runs])
+    T = _dense(lat, n)
+    return np.linalg.solve(T[np.ix_(S, S)], rhs)
+
+
+RUNS = {
+    "one": [(10, 90)],
+    "schur": [(0, 40), (50, 120), (130, 131), (140, 200)],          # gaps of 28 cells: Schur complement
+    "cg": [(0, 30), (100, 229), (290, 300)],                         # gaps of 131 cells: CG, short runs dense
+    "cg-long": [(0, 140), (200, 300)],                               # CG with FFT solves on both runs
+}
+
+
+@pytest.mark.parametrize("case", sorted(RUNS))
+def test_solve_runs_is_the_dense_solve_on_the_stick_set(lattice, case):
+    runs = RUNS[case]
+    cells = sum(b - a for a, b in runs)
+    rng = np.random.default_rng(len(case))
+    rhs = rng.standard_normal((cells, 3))
+    rhs[:, 2] = 0.0  # a zero column stays zero
+    got, iterations = lattice.solve_runs(runs, SIZE, rhs)
+    ref = _stick_solve(lattice, runs, SIZE, rhs)
+    assert got.shape == rhs.shape
+    assert np.all(got[:, 2] == 0.0)
+    assert _rel(got[:, :2], ref[:, :2]) <= 1e-11
+    assert (iterations > 0) == case.startswith("cg")

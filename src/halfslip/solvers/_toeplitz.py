@@ -31,6 +31,44 @@ import numba
 import numpy as np
 from scipy import fft as sfft
 
+try:  # scipy's pocketfft binding, without the per-call dispatch of scipy.fft (4 us a call, the cost of a
+    # whole transform of 500 points): checked below against scipy.fft, which is used if this ever differs
+    from scipy.fft._pocketfft import pypocketfft as _pocket
+except ImportError:  # pragma: no cover - scipy without it
+    _pocket = None
+
+
+def _r2c_scipy(a: np.ndarray) -> np.ndarray:
+    return sfft.rfft(a, axis=0)
+
+
+def _c2r_scipy(a: np.ndarray, m: int) -> np.ndarray:
+    return sfft.irfft(a, m, axis=0)
+
+
+def _r2c_pocket(a: np.ndarray) -> np.ndarray:
+    return _pocket.r2c(a, (0,), True, 0, None, 1)
+
+
+def _c2r_pocket(a: np.ndarray, m: int) -> np.ndarray:
+    return _pocket.c2r(a, (0,), m, False, 2, None, 1)
+
+
+def _pocket_works() -> bool:
+    if _pocket is None:  # pragma: no cover
+        return False
+    try:
+        x = np.random.default_rng(1).standard_normal((30, 3))
+        X = _r2c_pocket(x)
+        return (np.array_equal(X, _r2c_scipy(x)) and np.array_equal(_c2r_pocket(X, 30), _c2r_scipy(X, 30))
+                and np.array_equal(_c2r_pocket(X[:, 0].copy(), 30), _c2r_scipy(X[:, 0], 30)))
+    except Exception:  # pragma: no cover - a changed private signature
+        return False
+
+
+#: rfft / irfft along axis 0 of an array of the full transform length (``_r2c(a)``, ``_c2r(A, m)``).
+_r2c, _c2r = (_r2c_pocket, _c2r_pocket) if _pocket_works() else (_r2c_scipy, _c2r_scipy)
+
 
 def kernel(u: np.ndarray, h: float, datum: float, compliance: float) -> np.ndarray:
     """t(u): minus the displacement at offset ``u`` from the centre of a unit-shear cell of width ``h``.
@@ -83,6 +121,29 @@ def _levinson(t: np.ndarray, n: int):  # pragma: no cover - compiled
     return B, eps
 
 
+def _padded(v: np.ndarray, m: int) -> np.ndarray:
+    """``v`` (n,) or (n, k) followed by zeros to m rows."""
+    out = np.zeros((m,) + v.shape[1:])
+    out[:v.shape[0]] = v
+    return out
+
+
+def _lower_toeplitz(c: np.ndarray) -> np.ndarray:
+    """The lower-triangular Toeplitz matrix with first column ``c``."""
+    n = c.size
+    i = np.arange(n)
+    d = i[:, None] - i[None, :]
+    return np.where(d >= 0, c[np.clip(d, 0, None)], 0.0)
+
+
+#: Spectra of T_n^-1 generators kept per lattice (4 columns of m/2 + 1 complex numbers each).
+GENERATORS = 256
+
+#: Runs of at most this many cells are solved with a cached dense T_n^-1 (n^2 numbers, at most
+#: 8 DENSE_CELLS^3 / 3 bytes for all of them): a product of n^2 beats the four transforms and their
+#: per-call costs up to here.
+DENSE_CELLS = 128
+
 #: Solve a stick set of several runs through the Schur complement of the gaps between them while the
 #: gaps hold at most this many cells (the complement is dense: GAP_CELLS^2 numbers, one solve per gap
 #: cell); wider gaps separate few runs, for which block-Jacobi CG converges in a few iterations.
@@ -114,48 +175,84 @@ class ToeplitzLattice:
         self._B, self._eps = B, eps
         self._gs: dict[int, tuple] = {}
         self._circ: dict[int, tuple] = {}
+        self._inv: dict[int, np.ndarray] = {}
+        self._t_ext = self.t
 
     # -- products ---------------------------------------------------------
     def matvec(self, v: np.ndarray) -> np.ndarray:
         """T_n v for v of shape (n,) or (n, k), n <= size (cells of one contiguous range)."""
         n = v.shape[0]
         m, spec = self._circulant(n)
-        V = sfft.rfft(v, m, axis=0)
+        V = _r2c(_padded(v, m))
         if v.ndim == 2:
-            return sfft.irfft(V * spec[:, None], m, axis=0)[:n]
-        return sfft.irfft(V * spec, m)[:n]
+            return _c2r(V * spec[:, None], m)[:n]
+        return _c2r(V * spec, m)[:n]
 
     def _circulant(self, n: int):
-        got = self._circ.get(n)
+        """(m, spectrum) of the circulant of length m = next_fast_len(2n) that embeds T_n, cached per m.
+
+        The circulant of the whole kernel, c_k = c_(m-k) = t_k (k <= m/2), embeds every T_n with
+        2n <= m: one spectrum serves all the n that share a transform length.
+        """
+        m = sfft.next_fast_len(2 * n, real=True)
+        got = self._circ.get(m)
         if got is None:
-            m = sfft.next_fast_len(2 * n, real=True)
-            c = np.zeros(m)
-            c[:n] = self.t[:n]
-            c[m - n + 1:] = self.t[1:n][::-1]
-            got = (m, sfft.rfft(c))
-            if len(self._circ) > 64:
-                self._circ.clear()
-            self._circ[n] = got
+            half = m // 2
+            t = self._kernel_to(half + 1)
+            c = np.empty(m)
+            c[:half + 1] = t[:half + 1]
+            c[half + 1:] = t[1:m - half][::-1]
+            got = self._circ[m] = (m, _r2c(c))
         return got
+
+    def _kernel_to(self, count: int) -> np.ndarray:
+        """t_k for k < ``count`` (beyond ``size`` too: filler of the circulants)."""
+        if count <= self.t.size:
+            return self.t
+        if self._t_ext.size < count:
+            self._t_ext = kernel(self.h * np.arange(count), self.h, self.datum, self.compliance)
+        return self._t_ext
 
     # -- solves -------------------------------------------------------------
     def solve(self, n: int, w: np.ndarray) -> np.ndarray:
         """T_n^-1 w for w of shape (n,) or (n, k) (Gohberg-Semencul, by FFT)."""
         if n == 1:
             return w / self.t[0]
-        m, X, U, x0 = self._generator(n)
+        if n <= DENSE_CELLS:
+            return self._inverse(n) @ w
+        m, Xc, Uc, Xs, Us = self._generator(n)
         twod = w.ndim == 2
         W = w if twod else w[:, None]
-        R = W[::-1]
-        # L(v)^T w = J L(v) J w
-        FR = sfft.rfft(R, m, axis=0)
-        a = sfft.irfft(FR * X[:, None], m, axis=0)[:n][::-1]
-        b = sfft.irfft(FR * U[:, None], m, axis=0)[:n][::-1]
-        out = (sfft.irfft(sfft.rfft(a, m, axis=0) * X[:, None], m, axis=0)[:n]
-               - sfft.irfft(sfft.rfft(b, m, axis=0) * U[:, None], m, axis=0)[:n]) / x0
+        k = W.shape[1]
+        # L(v)^T w is the correlation of v and w: irfft(conj(V) W), no wrap-around for m >= 2n - 1
+        F = _r2c(_padded(W, m))
+        G = np.empty((F.shape[0], 2 * k), complex)
+        np.multiply(Xc, F, out=G[:, :k])
+        np.multiply(Uc, F, out=G[:, k:])
+        ab = _c2r(G, m)
+        ab[n:] = 0.0
+        AB = _r2c(ab)
+        # (L(x) a - L(u) b) / x0 in one inverse transform (1/x0 is in Xs, Us)
+        out = _c2r(AB[:, :k] * Xs - AB[:, k:] * Us, m)[:n]
         return out if twod else out[:, 0]
 
+    def _inverse(self, n: int) -> np.ndarray:
+        """T_n^-1, dense, from the Gohberg-Semencul formula (n <= DENSE_CELLS), cached."""
+        got = self._inv.get(n)
+        if got is None:
+            off = (n - 1) * n // 2
+            b = self._B[off:off + n]
+            e = self._eps[n - 1]
+            x = b[::-1] / e
+            u = np.zeros(n)
+            u[1:] = b[:-1] / e
+            Lx, Lu = _lower_toeplitz(x), _lower_toeplitz(u)
+            got = self._inv[n] = (Lx @ Lx.T - Lu @ Lu.T) / x[0]
+        return got
+
     def _generator(self, n: int):
+        """(m, conj X, conj U, X / x0, U / x0), the spectra of the Gohberg-Semencul generators of T_n^-1,
+        as columns."""
         got = self._gs.get(n)
         if got is None:
             off = (n - 1) * n // 2
@@ -165,9 +262,10 @@ class ToeplitzLattice:
             u = np.zeros(n)
             u[1:] = b[:-1] / e
             m = sfft.next_fast_len(2 * n, real=True)
-            got = (m, sfft.rfft(x, m), sfft.rfft(u, m), x[0])
-            if len(self._gs) > 256:
-                self._gs.clear()
+            X, U = _r2c(_padded(x, m))[:, None], _r2c(_padded(u, m))[:, None]
+            got = (m, np.conj(X), np.conj(U), X / x[0], U / x[0])
+            if len(self._gs) >= GENERATORS:  # the oldest goes (the contact moves slowly: recent n recur)
+                del self._gs[next(iter(self._gs))]
             self._gs[n] = got
         return got
 
