@@ -309,36 +309,58 @@ class ToeplitzLattice:
         iterations : int
             CG iterations (0 for one run).
         """
-        idx = np.concatenate([np.arange(a, b) for a, b in runs])
-        cuts = np.cumsum([0] + [b - a for a, b in runs])
+        cuts = np.cumsum([0] + [b - a for a, b in runs]).tolist()
+        pieces = list(zip(cuts[:-1], cuts[1:]))
+        places = [(slice(a, b), slice(c, d)) for (a, b), (c, d) in zip(runs, pieces)]  # (cells, rows of S)
+        m, spec = self._circulant(n)
+        spec = spec[:, None]
+        buf = np.zeros((m, rhs.shape[1]))  # T over the n cells, padded: only the rows of S are ever written
 
         def prec(r):
-            return np.concatenate([self.solve(cuts[i + 1] - cuts[i], r[cuts[i]:cuts[i + 1]])
-                                   for i in range(len(runs))])
+            out = np.empty_like(r)
+            for a, b in pieces:
+                out[a:b] = self.solve(b - a, r[a:b])
+            return out
 
         def op(v):
-            full = np.zeros((n, v.shape[1]))
-            full[idx] = v
-            return self.matvec(full)[idx]
+            for cells, rows in places:
+                buf[cells] = v[rows]
+            V = _r2c(buf)
+            V *= spec
+            full = _c2r(V, m)
+            return np.concatenate([full[cells] for cells, _ in places])
 
         y = prec(rhs)
         r = rhs - op(y)
         z = prec(r)
         p = z.copy()
-        rz = np.sum(r * z, axis=0)
-        norm = np.sqrt(np.sum(rhs * rhs, axis=0))
+        rz = _coldot(r, z)
+        norm = _coldot(rhs, rhs)
         norm[norm == 0.0] = 1.0
+        bound = tol * tol * norm  # |r| / |rhs| > tol, squared
+        zero = np.zeros_like(rz)
         it = 0
-        while it < max_iter and np.max(np.sqrt(np.sum(r * r, axis=0)) / norm) > tol:
+        while it < max_iter and np.any(_coldot(r, r) > bound):
             Ap = op(p)
-            pAp = np.sum(p * Ap, axis=0)
+            pAp = _coldot(p, Ap)
             # a column already solved (zero residual, e.g. a zero right-hand side) stays put
-            alpha = np.divide(rz, pAp, out=np.zeros_like(rz), where=pAp > 0.0)
+            alpha = np.divide(rz, pAp, out=zero.copy(), where=pAp > 0.0)
             y += alpha * p
             r -= alpha * Ap
             z = prec(r)
-            rz_new = np.sum(r * z, axis=0)
-            p = z + np.divide(rz_new, rz, out=np.zeros_like(rz), where=rz > 0.0) * p
+            rz_new = _coldot(r, z)
+            p *= np.divide(rz_new, rz, out=zero.copy(), where=rz > 0.0)
+            p += z
             rz = rz_new
             it += 1
         return y, it
+
+
+if hasattr(np, "vecdot"):
+    def _coldot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Column-wise dot products of two (n, k) arrays."""
+        return np.vecdot(a.T, b.T)
+else:  # pragma: no cover - numpy < 2
+    def _coldot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Column-wise dot products of two (n, k) arrays."""
+        return np.einsum("ij,ij->j", a, b)
