@@ -448,6 +448,12 @@ def summarize(result, path) -> list[str]:
                          f"{np.percentile(est, 95):.2g}, largest {est.max():.2g} of the contact width"
                          + (f" (solver.tol {tol:g}: {over} of {est.size} stored steps above)" if tol is not None
                             else ""))
+    if result.attrs.get("method") == "general" and "shear_error_estimate" in result:
+        est = result["shear_error_estimate"].values
+        est = est[np.isfinite(est)]
+        if est.size:
+            lines.append(f"  shear error estimate (int |q - q_exact| dx): median {np.median(est):.2g}, 95th "
+                         f"percentile {np.percentile(est, 95):.2g}, largest {est.max():.2g} of f P")
     # one note per kind of solver message: how many, the first and the worst step (halfslip.messages)
     for line in message_summary(result):
         lines.append(f"  note: {line}")

@@ -222,7 +222,7 @@ class _Records:
 
     names = ("t", "step", "P", "Q", "M", "sigma", "contact_left", "contact_right",
              "stick_left", "stick_right", "regime", "rigid_shift", "dissipation", "converged", "residual",
-             "error_estimate", "stick_intervals")
+             "error_estimate", "shear_error_estimate", "stick_intervals")
 
     def __init__(self):
         self.chunks = {k: [] for k in self.names}
@@ -236,7 +236,7 @@ class _Records:
                 self.buffer[k] = []
 
     def add(self, step: int, state: ContactState, regime: Regime, converged: bool = True, residual: float = 0.0,
-            stick_intervals: int = 1, error_estimate: float = 0.0):
+            stick_intervals: int = 1, error_estimate: float = 0.0, shear_error_estimate: float = 0.0):
         c = self.buffer
         c["t"].append(state.t)
         c["step"].append(step)
@@ -252,6 +252,7 @@ class _Records:
         c["converged"].append(int(converged))
         c["residual"].append(residual)
         c["error_estimate"].append(error_estimate)
+        c["shear_error_estimate"].append(shear_error_estimate)
         c["stick_intervals"].append(stick_intervals)
 
     def add_steps(self, steps: dict, mask: np.ndarray):
@@ -259,7 +260,7 @@ class _Records:
         self._flush()
         n = len(mask)
         defaults = {"converged": np.ones(n, np.int8), "residual": np.zeros(n),  # an exact marcher: always met
-                    "error_estimate": np.zeros(n),
+                    "error_estimate": np.zeros(n), "shear_error_estimate": np.zeros(n),
                     "stick_intervals": np.isfinite(np.asarray(steps["stick_left"], float)).astype(np.int8)}
         for k in self.names:
             self.chunks[k].append(np.asarray(steps.get(k, defaults.get(k)), _dtype(k))[mask])
@@ -275,8 +276,10 @@ class _Records:
 
     def load(self, ds: xr.Dataset, fields) -> None:
         """Start from the stored steps of an unfinished run."""
+        n = ds.sizes["t"]
         for k in self.names:
-            self.chunks[k] = [np.asarray(ds[k].values, _dtype(k))]
+            # a run written before the variable existed (0.3.0: shear_error_estimate) resumes with NaN there
+            self.chunks[k] = [np.asarray(ds[k].values if k in ds else np.full(n, np.nan), _dtype(k))]
             self.buffer[k] = []
         for k in (*fields, "state") if fields else ():
             self.fields[k] = list(np.asarray(ds[k].values, np.int8 if k == "state" else float))
@@ -444,8 +447,9 @@ class _Run:
         return sum(skip.count * segments[k].steps_per_cycle for k, skip in self.skip.skipped.items())
 
     def _store(self, i: int, state: ContactState, regime: Regime, converged: bool = True,
-               residual: float = 0.0, error_estimate: float = 0.0) -> None:
-        self.rec.add(i, state, regime, converged, residual, self.solver.stick_intervals(state), error_estimate)
+               residual: float = 0.0, error_estimate: float = 0.0, shear_error_estimate: float = 0.0) -> None:
+        self.rec.add(i, state, regime, converged, residual, self.solver.stick_intervals(state), error_estimate,
+                     shear_error_estimate)
         if self.save.fields:
             self.rec.add_fields(_fields(self.solver, state, self.save))
 
@@ -473,7 +477,8 @@ class _Run:
             self.skip, jump = self.skipper.check(self.skip, i, state)
         # a failed step is always stored, and so is the last marched step before a skip
         if self.save.stored(i, n) or jump is not None or not report.converged:
-            self._store(i, state, report.regime, report.converged, report.residual, report.error_estimate)
+            self._store(i, state, report.regime, report.converged, report.residual, report.error_estimate,
+                        report.shear_error_estimate)
         self.i, self.state = (i, state) if jump is None else jump
 
     def _advance_chunk(self) -> None:

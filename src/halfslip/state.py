@@ -86,6 +86,10 @@ class StepReport:
     error_estimate : float
         The method's estimate of its discretisation error in the stick edges,
         relative to the contact width (NaN when it makes none; 0 for an exact method).
+    shear_error_estimate : float
+        The method's estimate of its discretisation error in the shear traction:
+        int abs(q - q_exact) dx relative to f P (NaN when it makes none; 0 for an
+        exact method).
     """
 
     regime: Regime
@@ -96,6 +100,7 @@ class StepReport:
     residual: float = 0.0
     iterations: int = 0
     error_estimate: float = math.nan
+    shear_error_estimate: float = math.nan
 
 
 @dataclass(frozen=True)

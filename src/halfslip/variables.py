@@ -60,6 +60,8 @@ RUN: dict[str, tuple[str, str]] = {
     "residual": ("1", "violation of the step's checks relative to their tolerance (<= 1 when converged)"),
     "error_estimate": ("1", "estimated error of the stick edges relative to the contact width (general solver: "
                             "distance to the half-resolution solution; 0 for the exact method)"),
+    "shear_error_estimate": ("1", "estimated error of the shear traction, int abs(q - q_exact) dx relative to f P "
+                                  "(general solver: distance to the half-resolution solution; 0 for the exact method)"),
     "stick_intervals": ("1", "number of stick intervals (0 when nothing sticks)"),
     "state": ("1", "what the surface point did in the step"),
     "final_t": ("s", "time of the run's last state (after skipped cycles: the end they stand for)"),

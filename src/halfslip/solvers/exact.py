@@ -377,7 +377,7 @@ class ExactMemory(TangentialSolver):
             memory=mem,
         )
         report = StepReport(regime, regime in (Regime.PARTIAL_SLIP, Regime.GROSS_SLIDING), P_changed, message,
-                            error_estimate=0.0)
+                            error_estimate=0.0, shear_error_estimate=0.0)
         return new_state, report
 
     @property

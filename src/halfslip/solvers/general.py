@@ -303,7 +303,8 @@ class GeneralSolver(TangentialSolver):
                                converged=all(r.converged for r in reports),
                                residual=max(r.residual for r in reports),
                                iterations=sum(r.iterations for r in reports),
-                               error_estimate=_at_least(last.error_estimate, spread))
+                               error_estimate=_at_least(last.error_estimate, spread),
+                               shear_error_estimate=last.shear_error_estimate)
 
     def _pieces(self, state: ContactState, ctx: "_Context", fine: "_Outcome") -> int:
         """Sub-steps for a step whose single solve is ``fine`` (1: keep it).
@@ -404,7 +405,7 @@ class GeneralSolver(TangentialSolver):
         mem = state.memory
         N1, h = ctx.N1, ctx.h
         W = N1.right - N1.left
-        error = math.nan
+        error = shear = math.nan
         spread = 0.0
         coarse = mem.coarse
         if self.estimate and shadow_from is not None:
@@ -416,6 +417,7 @@ class GeneralSolver(TangentialSolver):
             coarse = rough.memory
             error = max(_apart(a, b) for a, b in zip(fine.stick, rough.stick)) / W
             spread = max(_apart(a, b) for a, b in zip(fine.widest, rough.widest)) / W
+            shear = _shear_apart(fine.memory, coarse) / (self.f * loads1.P)
         elif not self.estimate:
             coarse = None
         if mem.normal is not None and fine.regime != Regime.GROSS_SLIDING:
@@ -431,7 +433,8 @@ class GeneralSolver(TangentialSolver):
             message = "; ".join(m for m in (message, f"active set not converged (check residual {fine.residual:.3g} "
                                                       f"x tolerance)") if m)
         return new, StepReport(fine.regime, fine.slipped, ctx.normal_changed, message, converged=converged,
-                               residual=fine.residual, iterations=fine.iterations, error_estimate=error), spread
+                               residual=fine.residual, iterations=fine.iterations, error_estimate=error,
+                               shear_error_estimate=shear), spread
 
     # -- one lattice ----------------------------------------------------------
     def _lattice(self, h: float, n: int) -> ToeplitzLattice:
@@ -949,6 +952,21 @@ def _unresolved_edges(N1: NormalSolution, loads0: Loads, loads1: Loads, f: float
         if cell == 0 and (abs(u) >= f * v if v > 0.0 else abs(u) > drive):
             count += 1
     return count
+
+
+def _shear_apart(fine: GeneralMemory, coarse: GeneralMemory) -> float:
+    """int abs(q_fine - q_coarse) dx of two lattices' solutions [N/m], q = (q_j / cap_j) p within each cell.
+
+    Both shears are the cell's ratio chi_j = q_j / cap_j times the pressure, so
+    the integral is sum_j h cap_j abs(chi_j - chi_J) over the fine cells j, J
+    the shadow's cell holding j's centre (cells without load count nothing).
+    """
+    def ratio(m):
+        cap = m.capacity
+        return np.divide(m.q, cap, out=np.zeros_like(m.q), where=cap > 0.0)
+
+    J = np.clip(np.floor(fine.x / coarse.spacing).astype(np.int64) - coarse.first, 0, coarse.q.size - 1)
+    return fine.spacing * float(np.sum(fine.capacity * np.abs(ratio(fine) - ratio(coarse)[J])))
 
 
 def _at_least(estimate: float, spread: float) -> float:
