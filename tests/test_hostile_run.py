@@ -349,6 +349,21 @@ def test_the_untouched_file_still_resumes(unfinished, tmp_path):
         assert ds.attrs["complete"] == 1
 
 
+def test_a_file_from_before_the_shear_estimate_resumes(unfinished, tmp_path):
+    """A 0.3.0 run file has no per-step shear_error_estimate (added in 0.3.1): it resumes, the steps
+    it stored get NaN there (nothing was estimated), the steps marched after the resume a value."""
+    scene_file, target = crafted(unfinished, tmp_path, lambda f: f.__delitem__("shear_error_estimate"))
+    with xr.open_dataset(target) as ds:
+        assert "shear_error_estimate" not in ds
+        stored = ds.sizes["t"]
+    done = halfslip("run", scene_file, "-o", target, "--resume", "--quiet")
+    assert done.returncode == 0, done.stderr
+    with xr.open_dataset(target) as ds:
+        assert ds.attrs["complete"] == 1
+        estimate = ds["shear_error_estimate"].values
+        assert np.all(np.isnan(estimate[:stored])) and np.all(np.isfinite(estimate[stored:]))
+
+
 def test_another_scenes_file_is_refused_before_its_checkpoint_is_read(unfinished, tmp_path):
     scene_file, target = crafted(unfinished, tmp_path, lambda f: set_tree(f, "not json"))
     other = tmp_path / "other.yaml"
