@@ -10,7 +10,7 @@ Profile (abstract)
 Hertz(radius), RoundedPunch(flat_half_width, radius), TabulatedProfile(x, h)
 
 NormalProblem(profile, compliance)
-    .solve(P, M=0.0) -> NormalSolution
+    .solve(P, M=0.0, near=None) -> NormalSolution   (near: a solution at nearby loads, a warm start)
     # fast symmetric paths, M = 0, vectorised over P / a:
     .half_width(P)  -> a(P)          (0 where P <= 0; rounded punch -> w as P -> 0+)
     .load(a)        -> P(a)
@@ -69,6 +69,8 @@ __all__ = ["Material", "Profile", "Hertz", "RoundedPunch", "TabulatedProfile", "
 
 _MAX_NEWTON_ITER = 60  # caps of the nonlinear iterations, which converge in far fewer
 _MAX_BRACKET_ITER = 200
+_MAX_WARM_ITER = 12  # a warm start that needs more falls back to the cold start
+_WARM_REACH = 0.25  # largest edge move (relative to d) taken from the first-order prediction
 _SYMMETRY_RTOL = 1e-12
 _EPS = float(np.finfo(float).eps)
 
@@ -529,6 +531,28 @@ class _ContactPressure:
         data = _piece_integrals(pieces, np.array([center]), np.array([half_width]))
         return cls.from_integrals(pieces, compliance, center, half_width, data)
 
+    def edge_coefficients(self) -> tuple[float, float]:
+        """(k_left, k_right) with p ~ k sqrt(distance to the edge) at each edge.
+
+        At the right edge sqrt(1 - s^2) -> sqrt(2 dist / d) and, for a knot
+        inside, L(x, knot) -> sqrt(dist) sqrt(2 (knot - left) / (d (right - knot)))
+        (mirrored at the left edge).
+        """
+        x0, d = self.center, self.half_width
+        left, right = x0 - d, x0 + d
+        c0, c1 = self.smooth
+        root = math.sqrt(2.0 / d)
+        k_left, k_right = (c0 - c1) * root, (c0 + c1) * root
+        if self.knots.size:
+            to_left, to_right = self.knots - left, right - self.knots
+            j0, j1, j2 = self.jumps.T
+            at_right = j0 + to_right * (j1 + to_right * j2)
+            at_left = j0 - to_left * (j1 - to_left * j2)
+            k_right += float(np.sum(at_right * np.sqrt(2.0 * to_left / (d * to_right))))
+            k_left += float(np.sum(at_left * np.sqrt(2.0 * to_right / (d * to_left))))
+        scale = 1.0 / (math.pi * self.compliance)
+        return k_left * scale, k_right * scale
+
     def __call__(self, x: ArrayLike) -> FloatArray:
         x = np.asarray(x, dtype=float)
         x0, d = self.center, self.half_width
@@ -680,6 +704,7 @@ def _solve_contact_equations(
     tol: float,
     half_width_guess: float | None = None,
     max_iter: int = _MAX_NEWTON_ITER,
+    start: tuple[float, float] | None = None,
 ) -> _ContactIteration:
     """Contact centre and half-width for loads (P, M), any profile (N1, N2).
 
@@ -706,6 +731,10 @@ def _solve_contact_equations(
         Where the search for the starting half-width begins (default: the
         Hertz half-width for a radius equal to the profile's length scale).
     max_iter : int
+    start : (float, float), optional
+        (x0, d) to start the iteration at (a warm start, see
+        ``_warm_contact``), instead of the cold start below; ``half_width_guess``
+        is then unused.
 
     Returns
     -------
@@ -721,13 +750,16 @@ def _solve_contact_equations(
     """
     pieces = profile._slope_pieces
     A = compliance
-    lowest, highest = _span(profile)
-    x0 = min(max(M / P, lowest), highest)
-    if half_width_guess is None:
-        half_width_guess = math.sqrt(2.0 * A * profile.length_scale * P / math.pi)
-    d = _initial_half_width(pieces, A, P, x0, half_width_guess)
-    if d is None:
-        return _ContactIteration(False, 0, math.inf, x0, math.nan)
+    if start is not None:
+        x0, d = start
+    else:
+        lowest, highest = _span(profile)
+        x0 = min(max(M / P, lowest), highest)
+        if half_width_guess is None:
+            half_width_guess = math.sqrt(2.0 * A * profile.length_scale * P / math.pi)
+        d = _initial_half_width(pieces, A, P, x0, half_width_guess)
+        if d is None:
+            return _ContactIteration(False, 0, math.inf, x0, math.nan)
     equations = _ContactEquations(pieces, A, P, M, d)
     F, J, noise = equations(x0, d)
     for iteration in range(max_iter + 1):
@@ -755,6 +787,30 @@ def _solve_contact_equations(
             break
         x0, d, F, J, noise = x_try, d_try, F_try, J_try, noise_try
     return _ContactIteration(False, iteration, norm, x0, d)
+
+
+def _warm_contact(near: NormalSolution, P: float, M: float) -> tuple[float, float]:
+    """(x0, d) predicted to first order under (P, M) from the solution ``near`` (N3).
+
+    The load increments (dP, dM) on the contact of ``near`` add the flat-punch
+    pressure, c / sqrt(dist) at each edge with c = (dP +- 2 dM0 / d) /
+    (pi sqrt(2 d)) and dM0 the moment increment about the contact centre; an
+    edge where the pressure is k sqrt(dist) then moves outwards by 2 c / k.
+    This is the exact linearisation of (N1, N2) at ``near``, from the pressure
+    already built there (no moment evaluation). Where it is not finite or
+    moves an edge by more than ``_WARM_REACH`` d, the contact of ``near`` itself.
+    """
+    x0, d = near.center, near.half_width
+    k_left, k_right = near._pressure.edge_coefficients()
+    dP = P - near.P
+    dM0 = (M - near.M) - dP * x0
+    base = math.pi * math.sqrt(2.0 * d)
+    with np.errstate(all="ignore"):
+        out_left = 2.0 * (dP - 2.0 * dM0 / d) / (base * k_left)
+        out_right = 2.0 * (dP + 2.0 * dM0 / d) / (base * k_right)
+    if math.isfinite(out_left) and math.isfinite(out_right) and max(abs(out_left), abs(out_right)) <= _WARM_REACH * d:
+        return x0 + 0.5 * (out_right - out_left), d + 0.5 * (out_right + out_left)
+    return x0, d
 
 
 # ---------------------------------------------------------------------------
@@ -1058,7 +1114,7 @@ class NormalProblem:
 
     # -- any profile, any moment ----------------------------------------------
 
-    def solve(self, P: float, M: float = 0.0) -> NormalSolution:
+    def solve(self, P: float, M: float = 0.0, near: NormalSolution | None = None) -> NormalSolution:
         """Contact edges, rotation and pressure under loads (P, M) (N1, N2).
 
         Closed forms serve Hertz (any M) and the rounded punch under M = 0;
@@ -1070,15 +1126,26 @@ class NormalProblem:
             Normal load [N/m]; P <= 0 gives a separated solution.
         M : float, optional
             Moment about x = 0 [N].
+        near : NormalSolution, optional
+            A solution of this problem at nearby loads (e.g. the previous
+            sub-step's). The general solver then starts its Newton iteration
+            at the first-order prediction from ``near`` instead of searching
+            for a start; when that iteration does not converge in
+            ``_MAX_WARM_ITER`` iterations it starts cold as without ``near``.
+            The answer agrees with the cold one to the solver's tolerance
+            (``iterations`` counts the warm iterations). Ignored by the closed
+            forms and when ``near`` is separated.
 
         Raises
         ------
         ValueError
             If P or M is not finite, if no contact inside a tabulated
-            profile's span carries (P, M), or if the general solver does not
-            converge.
+            profile's span carries (P, M), if the general solver does not
+            converge, or if ``near`` is neither None nor a NormalSolution.
         """
         P, M = self._loads(P, M)
+        if near is not None and not isinstance(near, NormalSolution):
+            raise ValueError(f"near must be a NormalSolution or None, got {type(near).__name__}")
         if not P > 0.0:
             return self._separated(P, M)
         closed = self._forms.contact(P, M) if self._forms is not None else None
@@ -1087,7 +1154,7 @@ class NormalProblem:
         guess = None
         if self._forms is not None and self._forms.cheap_half_width:
             guess = float(self._forms.half_width(np.array(P)))
-        return self._solve_general(P, M, guess)
+        return self._solve_general(P, M, guess, near)
 
     @staticmethod
     def _loads(P: float, M: float) -> tuple[float, float]:
@@ -1100,11 +1167,17 @@ class NormalProblem:
     def _separated(P: float, M: float) -> NormalSolution:
         return NormalSolution(P=P, M=M, left=0.0, right=0.0, rotation=0.0, separated=True)
 
-    def _solve_general(self, P: float, M: float, half_width_guess: float | None = None) -> NormalSolution:
+    def _solve_general(
+        self, P: float, M: float, half_width_guess: float | None = None, near: NormalSolution | None = None
+    ) -> NormalSolution:
         """The general solver, for any profile (also those with closed forms, to test it on them)."""
         P, M = self._loads(P, M)
         if not P > 0.0:
             return self._separated(P, M)
+        if near is not None:
+            warm = self._solve_warm(P, M, near)
+            if warm is not None:
+                return warm
         result = _solve_contact_equations(
             self.profile, self.compliance, P, M, tol=self.tol, half_width_guess=half_width_guess
         )
@@ -1128,6 +1201,30 @@ class NormalProblem:
                 f"load too large for the tabulated profile: the contact [{left:g}, {right:g}] under "
                 f"P={P!r}, M={M!r} leaves the tabulated span [{lowest:g}, {highest:g}]"
             )
+        return self._solution(P, M, result.center, result.half_width, result.iterations, result.residual)
+
+    def _solve_warm(self, P: float, M: float, near: NormalSolution) -> NormalSolution | None:
+        """The general solver started from ``near`` (``_warm_contact``); None where the cold start must decide.
+
+        None when ``near`` is separated, when the iteration does not converge
+        in ``_MAX_WARM_ITER`` iterations or leaves its trust checks, and when
+        the contact found leaves a tabulated span (the cold start then gives
+        the answer, or today's error).
+        """
+        if near.separated or near._pressure is None or not (near.half_width > 0.0 and near.P > 0.0):
+            return None
+        start = _warm_contact(near, P, M)
+        if not (math.isfinite(start[0]) and math.isfinite(start[1]) and start[1] > 0.0):
+            return None
+        result = _solve_contact_equations(
+            self.profile, self.compliance, P, M, tol=self.tol, max_iter=_MAX_WARM_ITER, start=start
+        )
+        if not result.converged:
+            return None
+        left, right = result.center - result.half_width, result.center + result.half_width
+        lowest, highest = _span(self.profile)
+        if not (lowest <= left and right <= highest):
+            return None
         return self._solution(P, M, result.center, result.half_width, result.iterations, result.residual)
 
     def _solution(
