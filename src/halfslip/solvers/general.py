@@ -363,7 +363,8 @@ class GeneralSolver(TangentialSolver):
         mem = state.memory
         normal_changed = mem.normal is None or (loads1.P, loads1.M) != (loads0.P, loads0.M)
         if normal_changed:
-            N1 = self.problem.solve(loads1.P, loads1.M)
+            # warm-started from the step's start (the loads of consecutive (sub-)steps are close)
+            N1 = self.problem.solve(loads1.P, loads1.M, near=mem.normal)
             self.counters["normal_solves"] += 1
         else:
             N1 = mem.normal
