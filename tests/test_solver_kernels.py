@@ -177,7 +177,7 @@ def test_arrival_strains_is_its_quadrature_rule_to_rounding(short):
     """The gauge integral int_lam_lo^lam_x A/(pi sqrt|(x - L)(x - R)|) dlam through the same 49-point rule,
     in 40 digits on the exact cubic: the inverse square root at lam_x makes the integral sensitive to
     x - L there, which ``edges`` carries with an error of eps |L| (1e-6 of the gauge on a short step)."""
-    mp = pytest.importorskip("mpmath")
+    import mpmath as mp  # a test dependency (pyproject: test extra)
     mp.mp.dps = 40
     rng = np.random.default_rng(4)
     for path in _hermite_paths("hertz", 2, seed=13, short=short):
