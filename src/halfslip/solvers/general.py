@@ -263,7 +263,7 @@ class GeneralSolver(TangentialSolver):
 
         A step that slipped is taken again in equal sub-steps along the same
         line when its answer depends on the path within it (:meth:`_pieces`
-        says when and how many); the step's error estimate is that of its end.
+        says when and how many); :meth:`_finish` says what its error estimate is.
         """
         self.counters["steps"] += 1
         loads1 = Loads(*(float(v) for v in loads1))
