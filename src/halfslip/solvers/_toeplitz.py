@@ -236,16 +236,22 @@ class ToeplitzLattice:
         out = _c2r(AB[:, :k] * Xs - AB[:, k:] * Us, m)[:n]
         return out if twod else out[:, 0]
 
+    def _xu(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """The Gohberg-Semencul generators of the leading block T_n from the Levinson tables:
+        x = T_n^-1 e_1 and u = (0, x_(n-1), ..., x_1)."""
+        off = (n - 1) * n // 2
+        b = self._B[off:off + n]
+        e = self._eps[n - 1]
+        x = b[::-1] / e
+        u = np.zeros(n)
+        u[1:] = b[:-1] / e
+        return x, u
+
     def _inverse(self, n: int) -> np.ndarray:
         """T_n^-1, dense, from the Gohberg-Semencul formula (n <= DENSE_CELLS), cached."""
         got = self._inv.get(n)
         if got is None:
-            off = (n - 1) * n // 2
-            b = self._B[off:off + n]
-            e = self._eps[n - 1]
-            x = b[::-1] / e
-            u = np.zeros(n)
-            u[1:] = b[:-1] / e
+            x, u = self._xu(n)
             Lx, Lu = _lower_toeplitz(x), _lower_toeplitz(u)
             got = self._inv[n] = (Lx @ Lx.T - Lu @ Lu.T) / x[0]
         return got
@@ -255,12 +261,7 @@ class ToeplitzLattice:
         as columns."""
         got = self._gs.get(n)
         if got is None:
-            off = (n - 1) * n // 2
-            b = self._B[off:off + n]
-            e = self._eps[n - 1]
-            x = b[::-1] / e
-            u = np.zeros(n)
-            u[1:] = b[:-1] / e
+            x, u = self._xu(n)
             m = sfft.next_fast_len(2 * n, real=True)
             X, U = _r2c(_padded(x, m))[:, None], _r2c(_padded(u, m))[:, None]
             got = (m, np.conj(X), np.conj(U), X / x[0], U / x[0])
