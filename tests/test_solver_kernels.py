@@ -29,7 +29,9 @@ EPS = np.finfo(float).eps
 
 
 def _hermite_paths(kind: str, count: int, seed: int, short: bool = False) -> list[EdgePath]:
-    """Hermite edge paths between real normal solutions: P and M changed at random (``short``: by ~1e-3)."""
+    """Hermite edge paths between real normal solutions: P and M changed at random (``short``: by ~1e-3),
+    with Q and sigma changed too (they move no edge; the arrival strains are driven by them): dQ up to
+    0.3 f P0, dsigma so that (pi/4) a dsigma <= 0.3 dQ (the two terms of the strain never cancel much)."""
     problem = NormalProblem(PROFILES[kind], A)
     a = problem.solve(P0, 0.0).half_width
     rng = np.random.default_rng(seed)
@@ -40,7 +42,9 @@ def _hermite_paths(kind: str, count: int, seed: int, short: bool = False) -> lis
             P1, M1 = P0_ * (1.0 + rng.uniform(-2e-3, 2e-3)), M0 + rng.uniform(-2e-3, 2e-3) * P0 * a
         else:
             P1, M1 = P0 * rng.uniform(0.5, 1.5), rng.uniform(-0.2, 0.2) * P0 * a
-        loads0, loads1 = Loads(P0_, 0.0, M0, 0.0), Loads(P1, 0.0, M1, 0.0)
+        dQ = rng.uniform(0.1, 0.3) * 0.6 * P0
+        dS = rng.uniform(-0.3, 0.3) * dQ * 4.0 / (math.pi * a)
+        loads0, loads1 = Loads(P0_, 0.0, M0, 0.0), Loads(P1, dQ, M1, dS)
         path = EdgePath(problem, problem.solve(P0_, M0), problem.solve(P1, M1), loads0, loads1)
         assert path._kind == "hermite"
         paths.append(path)
@@ -157,26 +161,12 @@ def test_arrival_agrees_with_the_floating_point_bisection_within_its_rounding_ba
             assert np.all(np.abs(got - old) <= band)
 
 
-def test_arrival_strains_returns_the_fractions_only_when_asked():
-    path = _hermite_paths("punch", 1, seed=2)[0]
-    x = np.linspace(path._h0[1], path._h1[1], 9)
-    side = 1 if path._h1[1] > path._h0[1] else -1
-    if side < 0:
-        x = np.linspace(path._h0[0], path._h1[0], 9)
-    two = arrival_strains(path, x, side, A)
-    assert len(two) == 2
-    inc, gauge, lam = arrival_strains(path, x, side, A, fractions=True)
-    assert np.array_equal(inc, two[0]) and np.array_equal(gauge, two[1])
-    assert np.array_equal(lam, path.arrival(x, side))
-    assert [v.shape for v in arrival_strains(path, np.zeros(0), side, A, fractions=True)] == [(0,)] * 3
-    assert len(arrival_strains(path, np.zeros(0), side, A)) == 2
-
-
 @pytest.mark.parametrize("short", [False, True])
 def test_arrival_strains_is_its_quadrature_rule_to_rounding(short):
-    """The gauge integral int_lam_lo^lam_x A/(pi sqrt|(x - L)(x - R)|) dlam through the same 49-point rule,
-    in 40 digits on the exact cubic: the inverse square root at lam_x makes the integral sensitive to
-    x - L there, which ``edges`` carries with an error of eps |L| (1e-6 of the gauge on a short step)."""
+    """The strain int_lam_lo^lam_x A sgn(s) (Q'/pi + sigma' s/4) / sqrt|(x - L)(x - R)| dlam through the same
+    49-point rule, in 40 digits on the exact cubic: the inverse square root at lam_x makes the integral
+    sensitive to x - L there, which ``edges`` carries with an error of eps |L| (1e-6 of the strain on a
+    short step)."""
     import mpmath as mp  # a test dependency (pyproject: test extra)
     mp.mp.dps = 40
     rng = np.random.default_rng(4)
@@ -186,7 +176,8 @@ def test_arrival_strains_is_its_quadrature_rule_to_rounding(short):
             if side * (path._h1[i] - path._h0[i]) <= 0.0:
                 continue  # this edge recedes: nothing arrives
             x = path._h0[i] + (path._h1[i] - path._h0[i]) * rng.uniform(0.05, 0.95, 3)
-            _, gauge, lam_x = arrival_strains(path, x, side, A, fractions=True)
+            strain, lam_x = arrival_strains(path, x, side, A), path.arrival(x, side)
+            dQ, dS = path.loads1.Q - path.loads0.Q, path.loads1.sigma - path.loads0.sigma
             coef = [[mp.mpf(float(c[j])) for c in (path._h0, path._v0, path._h1, path._v1)] for j in (0, 1)]
 
             def edge(j, s):
@@ -194,7 +185,7 @@ def test_arrival_strains_is_its_quadrature_rule_to_rounding(short):
                 return (1 + 2 * s) * (1 - s) ** 2 * h0 + s * (1 - s) ** 2 * v0 + s * s * (3 - 2 * s) * h1 \
                     + s * s * (s - 1) * v1
 
-            for xk, lk, gk in zip(x, lam_x, gauge):
+            for xk, lk, gk in zip(x, lam_x, strain):
                 X = mp.mpf(float(xk))
                 lx = mp.findroot(lambda s: edge(i, s) - X, mp.mpf(float(lk)))
                 assert abs(float(lx) - lk) <= 1e-15
@@ -205,9 +196,10 @@ def test_arrival_strains_is_its_quadrature_rule_to_rounding(short):
                     # x - e_i(s) from the exact difference e_i(lx) - e_i(s) (lx - s = lx u^2 exactly)
                     near = (edge(i, lx) - edge(i, s)) if u > 0 else 0
                     root = mp.sqrt(abs(near * (X - edge(1 - i, s))))
+                    offset = X - (edge(0, s) + edge(1, s)) / 2  # s of the module: x - contact centre
                     if root > 0:
-                        ref += 2 * lx * u * w / root
-                ref = float(ref * A * side / mp.pi)
+                        ref += 2 * lx * u * w / root * (mp.mpf(dQ) / mp.pi + mp.mpf(dS) * offset / 4)
+                ref = float(ref * A * side)
                 assert gk == pytest.approx(ref, rel=1e-12, abs=0.0)
 
 

@@ -16,9 +16,7 @@ A sigma'/4 from T1). Hence, exactly,
 where Delta-eps_0 is the strain at x at the start of the step (outside the
 old contact). The integrand has an inverse square root at lam_x;
 lam = lam_x - (lam_x - lam_lo) u^2 removes it and Gauss-Legendre in u does the
-rest (tanh-sinh in u, for the weak singularity where contact forms). The same integral without (Q', sigma') and with 1/pi gives the strain a
-unit of extra shear force, spread over the step, would lock in (the "gauge"
-used when one edge sticks while the other slips).
+rest (tanh-sinh in u, for the weak singularity where contact forms).
 """
 from __future__ import annotations
 
@@ -355,9 +353,8 @@ def _edge_rates(sol: NormalSolution, dP: float, dM: float) -> np.ndarray:
     return np.array([-2.0 * c_left / k_left, 2.0 * c_right / k_right])
 
 
-def arrival_strains(path: EdgePath, x: np.ndarray, side: int, compliance: float, fractions: bool = False
-                    ) -> tuple[np.ndarray, np.ndarray] | tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Strain locked in by the stuck increments of the step, and by a unit gauge force.
+def arrival_strains(path: EdgePath, x: np.ndarray, side: int, compliance: float) -> np.ndarray:
+    """Strain locked in by the stuck increments of the step.
 
     Parameters
     ----------
@@ -366,22 +363,15 @@ def arrival_strains(path: EdgePath, x: np.ndarray, side: int, compliance: float,
         Points arriving at the ``side`` edge (-1 left, +1 right) during the step.
     compliance : float
         A.
-    fractions : bool
-        Also return the arrival fractions lam_x (``path.arrival(x, side)``, computed here anyway).
 
     Returns
     -------
-    increment : ndarray, shape (n,)
+    ndarray, shape (n,)
         int A sgn(s)(Q'/pi + sigma' s/4) / sqrt(s^2 - d^2) dlam from lam_lo to lam_x.
-    gauge : ndarray, shape (n,)
-        int A sgn(s) / (pi sqrt(s^2 - d^2)) dlam over the same range (per unit of
-        shear force added uniformly over the step).
-    lam_x : ndarray, shape (n,)
-        Only with ``fractions``: the fraction of the step at which each point arrives.
     """
     x = np.asarray(x, dtype=float)
     if x.size == 0:
-        return (np.zeros(0), np.zeros(0), np.zeros(0)) if fractions else (np.zeros(0), np.zeros(0))
+        return np.zeros(0)
     l0, l1 = path.loads0, path.loads1
     dQ, dS = l1.Q - l0.Q, l1.sigma - l0.sigma
     lam_x = path.arrival(x, side)
@@ -400,8 +390,4 @@ def arrival_strains(path: EdgePath, x: np.ndarray, side: int, compliance: float,
     weight = 2.0 * span[:, None] * _U * _W
     with np.errstate(divide="ignore", invalid="ignore"):
         kernel = np.where(root > 0.0, weight / root, 0.0) * (compliance * side)
-    increment = kernel @ np.full(_U.shape, dQ / math.pi) + (kernel * s).sum(axis=1) * (0.25 * dS)
-    gauge = kernel.sum(axis=1) / math.pi
-    if fractions:
-        return increment, gauge, lam_x
-    return increment, gauge
+    return kernel @ np.full(_U.shape, dQ / math.pi) + (kernel * s).sum(axis=1) * (0.25 * dS)

@@ -803,7 +803,7 @@ def _integrate(path: EdgePath, xs: np.ndarray, edge: float, side: int, A: float,
     a, b = ends[:-1], ends[1:]
     pts = a[:, None] + (b - a)[:, None] * _GL_T[None, :]
     flat = pts.ravel()
-    inc, _ = arrival_strains(path, flat, side, A)
+    inc = arrival_strains(path, flat, side, A)
     if formation is not None:
         l0, l1 = formation
         inc = inc + 0.25 * A * (l0.sigma + path.lam_lo * (l1.sigma - l0.sigma))
