@@ -801,13 +801,12 @@ def _warm_contact(near: NormalSolution, P: float, M: float) -> tuple[float, floa
     moves an edge by more than ``_WARM_REACH`` d, the contact of ``near`` itself.
     """
     x0, d = near.center, near.half_width
-    k_left, k_right = near._pressure.edge_coefficients()
-    dP = P - near.P
-    dM0 = (M - near.M) - dP * x0
-    base = math.pi * math.sqrt(2.0 * d)
-    with np.errstate(all="ignore"):
-        out_left = 2.0 * (dP - 2.0 * dM0 / d) / (base * k_left)
-        out_right = 2.0 * (dP + 2.0 * dM0 / d) / (base * k_right)
+    try:
+        with np.errstate(all="ignore"):
+            d_left, d_right = near.edge_rates(P - near.P, M - near.M)
+    except ZeroDivisionError:  # an edge without a square-root coefficient: no prediction
+        return x0, d
+    out_left, out_right = -d_left, d_right
     if math.isfinite(out_left) and math.isfinite(out_right) and max(abs(out_left), abs(out_right)) <= _WARM_REACH * d:
         return x0 + 0.5 * (out_right - out_left), d + 0.5 * (out_right + out_left)
     return x0, d
@@ -863,6 +862,20 @@ class NormalSolution:
         if self._pressure is None:
             return np.zeros(np.shape(x))[()]
         return self._pressure(x)[()]
+
+    def edge_rates(self, dP: float, dM: float) -> tuple[float, float]:
+        """(dL, dR): how the contact edges move, to first order, under load increments (dP, dM) (N3).
+
+        The increments add the flat-punch pressure c / sqrt(dist) at each edge,
+        c = (dP -+ 2 dM0 / d) / (pi sqrt(2 d)) with dM0 the moment increment about
+        the contact centre; an edge where the pressure is k sqrt(dist) moves
+        outwards by 2 c / k (k exact, ``_ContactPressure.edge_coefficients``).
+        """
+        d = self.half_width
+        k_left, k_right = self._pressure.edge_coefficients()
+        dM0 = dM - dP * self.center
+        base = math.pi * math.sqrt(2.0 * d)
+        return -2.0 * (dP - 2.0 * dM0 / d) / (base * k_left), 2.0 * (dP + 2.0 * dM0 / d) / (base * k_right)
 
 
 # ---------------------------------------------------------------------------

@@ -123,8 +123,8 @@ class EdgePath:
             dP, dM = P1 - P0, loads1.M - loads0.M
             self._h0 = np.array([start.left, start.right])
             self._h1 = np.array([end.left, end.right])
-            self._v0 = _edge_rates(start, dP, dM)
-            self._v1 = _edge_rates(end, dP, dM)
+            self._v0 = np.array(start.edge_rates(dP, dM))
+            self._v1 = np.array(end.edge_rates(dP, dM))
 
     def _PM(self, lam):
         l0, l1 = self.loads0, self.loads1
@@ -339,18 +339,6 @@ def _quadratic_roots(a: float, b: float, c: float) -> list[float]:
         return []
     q = -0.5 * (b + math.copysign(math.sqrt(disc), b))
     return sorted([q / a, c / q] if q != 0.0 else [0.0])
-
-
-def _edge_rates(sol: NormalSolution, dP: float, dM: float) -> np.ndarray:
-    """(dL/dlam, dR/dlam) on the contact of ``sol`` for load rates (dP, dM) (N3)."""
-    d = sol.half_width
-    dM0 = dM - dP * sol.center
-    eps = 1e-9 * d
-    k_left = float(sol.pressure(sol.left + eps)) / math.sqrt(eps)
-    k_right = float(sol.pressure(sol.right - eps)) / math.sqrt(eps)
-    c_left = (dP - 2.0 * dM0 / d) / (math.pi * math.sqrt(2.0 * d))
-    c_right = (dP + 2.0 * dM0 / d) / (math.pi * math.sqrt(2.0 * d))
-    return np.array([-2.0 * c_left / k_left, 2.0 * c_right / k_right])
 
 
 def arrival_strains(path: EdgePath, x: np.ndarray, side: int, compliance: float) -> np.ndarray:
