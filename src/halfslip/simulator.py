@@ -85,7 +85,7 @@ class ContactEdges:
     Attributes
     ----------
     P, M : ndarray, shape (k,)
-        The distinct (P, M) samples of the history with P > 0 (sorted rows).
+        The distinct (P, M) samples of the history with P > 0, in the order they first occur.
     left, right : ndarray, shape (k,)
         Contact edges under each of them [m].
     """
@@ -110,18 +110,23 @@ def contact_edges(scene, problem: NormalProblem) -> ContactEdges | None:
     """Solve the normal problem once per distinct (P, M) sample of the history with P > 0.
 
     A periodic history repeats its samples, so this is about one cycle's worth
-    of solves however many cycles it has. None when the history never presses
-    the bodies together.
+    of solves however many cycles it has. The samples are taken in the order
+    in which they first occur, each solve warm-started from the previous one
+    (consecutive samples of a history are close; ``NormalProblem.solve(near=)``
+    starts cold by itself when the guess fails). None when the history never
+    presses the bodies together.
     """
     h = scene.history
     loads = np.column_stack([np.asarray(h.P, float), np.asarray(h.M, float)])
     loads = loads[loads[:, 0] > 0.0]
     if not loads.size:
         return None
-    loads = np.unique(loads, axis=0)
+    _, first = np.unique(loads, axis=0, return_index=True)
+    loads = loads[np.sort(first)]
     left, right = np.empty(len(loads)), np.empty(len(loads))
+    sol = None
     for k, (P, M) in enumerate(loads):
-        sol = problem.solve(P, M)
+        sol = problem.solve(P, M, near=sol)
         left[k], right[k] = sol.left, sol.right
     return ContactEdges(loads[:, 0], loads[:, 1], left, right)
 
