@@ -656,18 +656,20 @@ def test_substeps_cut_the_dissipation_error_of_a_growing_slipping_contact(kind):
 
 def test_error_estimate_on_every_slipping_step_bounds_the_edge_error():
     """The two-grid estimate (distance of the stick edges to a half-resolution shadow's, / W; the largest
-    of a step's sub-steps) is reported on every slipping step and bounds the actual edge error within a
-    measured factor.
+    of a step's sub-steps; at least EDGE_PLACEMENT = 0.1 of a cell) is reported on every slipping step
+    and bounds the actual edge error within a measured factor.
 
     J1 (Q = 0.25, 0.5, 0.75 f P) and J2 (unloading from 0.6 f P to 0.4, 0,
     -0.5 of it) on both profiles at 128 / 256 / 512 nodes (36 steps): actual
-    / estimate is 0.21 in the median and at most 1.09 (punch, 128 nodes, J1
-    at 0.25); asserted: at most 3 on every step, below 0.6 in the median.
-    Over a denser scan (17 ratios and 12 unloadings per resolution) the
-    worst case is 2.1 (Hertz, 512 nodes, J1 at 0.15: error 1.7e-4 of W,
-    estimate 8.2e-5). The memory keeps the last sub-step's estimate (at most
-    the reported one). Without the shadow (estimate=False) the report
-    carries NaN.
+    / estimate is 0.35 in the median and at most 1.06 (punch, 256 nodes);
+    asserted: at most 3 on every step, below 0.6 in the median. Over a
+    denser scan (19 loads and 12 unloadings per resolution, 128 .. 1024
+    nodes, 248 steps) at most 1.65. Without the floor (since 0.3.2 the edges
+    are placed by the traction margin, 0.09 of a cell in the median) the
+    lattices agreed by chance to 0.003 of a cell where the error was 0.1 (a
+    ratio of 39; this test's punch at 128 nodes: 3.4). The memory keeps the
+    last sub-step's estimate (at most the reported one). Without the shadow
+    (estimate=False) the report carries NaN.
     """
     ratios = []
     for kind in PROFILES:
@@ -696,6 +698,35 @@ def test_error_estimate_on_every_slipping_step_bounds_the_edge_error():
     problem, solver = make("hertz", 256, estimate=False)
     _, report = march(solver, [(P0, 0.0), (P0, 0.5 * F * P0)])[-1]
     assert report.slipped and math.isnan(report.error_estimate)
+
+
+@pytest.mark.parametrize("kind", PROFILES)
+@pytest.mark.parametrize("nodes", [128, 1024])
+def test_slip_zone_narrower_than_a_cell(kind, nodes):
+    """J1 at Q = 0.001 .. 0.03 f P: slip zones of 0.1 to 1 cell at 128 nodes, 0.5 to 8 at 1024.
+
+    Where the end cell sticks, (S1) says the edge slips and the slip zone is placed inside the end
+    cell ((x - E) m^2 -> x - c, the local Cattaneo solution): the largest edge error is 0.18 /
+    0.16 of a cell (Hertz, 128 / 1024 nodes), 0.06 / 0.18 (punch); with the end cell taken as the
+    edge (until 0.3.1) 0.68 / 0.51 and 0.32 / 0.68. Tolerance 0.3 of a cell. A step whose cells all
+    stick but whose edges slip by (S1) is a partial slip whose slip zones are within the end cells
+    (no cell slipped: nothing dissipated), and its estimate is at least a cell.
+    """
+    problem, solver = make(kind, nodes)
+    a = float(problem.half_width(P0))
+    base = march(solver, [(P0, 0.0)])[-1][0]
+    worst = 0.0
+    for ratio in np.linspace(0.001, 0.03, 30):
+        state, report = march(solver, [(P0, ratio * F * P0)], base)[-1]
+        b = float(problem.half_width(P0 - ratio * P0))
+        h = state.memory.spacing
+        worst = max(worst, abs(state.stick_right - b) / h, abs(state.stick_left + b) / h)
+        assert report.regime == Regime.PARTIAL_SLIP and report.converged
+        assert -a < state.stick_left < state.stick_right < a
+        if not report.slipped:
+            assert np.all(state.memory.status == 0) and state.dissipation == base.dissipation
+            assert report.error_estimate >= h / (2 * a)
+    assert worst < 0.3, worst
 
 
 @pytest.mark.parametrize("kind", PROFILES)

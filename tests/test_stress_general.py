@@ -237,7 +237,10 @@ def check_step(solver, prev, state, report):
         assert report.regime in (Regime.STICK, Regime.PARTIAL_SLIP)
         assert L <= state.stick_left <= state.stick_right <= R
         stuck = np.flatnonzero(status == 0)
-        assert stuck.size == n if report.regime == Regime.STICK else 0 < stuck.size < n
+        if report.regime == Regime.STICK:
+            assert stuck.size == n and (state.stick_left, state.stick_right) == (L, R)
+        else:  # every cell stuck: slip zones narrower than the end cells, which (S1) says slip
+            assert 0 < stuck.size < n or (stuck.size == n and (state.stick_left > L or state.stick_right < R))
         assert solver.stick_intervals(state) >= 1
         if n > 1:  # the outermost stick points lie within a cell outside the outermost stuck cells' centres
             assert centres[stuck[0]] - h <= state.stick_left <= centres[stuck[0]] + 1e-12 * W
