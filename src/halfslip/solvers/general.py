@@ -659,15 +659,22 @@ class GeneralSolver(TangentialSolver):
         return len(_runs(mem.status == 0))
 
     def stick_zones(self, state: ContactState) -> list[tuple[float, float]]:
-        """The stick intervals of the state, left to right, as (left, right) [m] within their cells."""
+        """The stick intervals of the state, left to right, as (left, right) [m] within their cells; an
+        interval that reaches an end cell ends at the state's stick edge there (the contact edge, or a
+        slip zone narrower than the end cell placed inside it where the step's (S1) says the edge slips)."""
         mem = state.memory
         if mem.normal is None:
             return []
         runs = _runs(mem.status == 0)
-        if len(runs) == 1 and runs[0] == (0, mem.q.size):
-            return [(mem.normal.left, mem.normal.right)]
+        if not runs:
+            return []
         qmax = self.f * mem.capacity
-        return [_run_edges(mem.x, mem.q, qmax, mem.status, mem.normal, mem.spacing, a, b - 1) for a, b in runs]
+        zones = [_run_edges(mem.x, mem.q, qmax, mem.status, mem.normal, mem.spacing, a, b - 1) for a, b in runs]
+        if runs[0][0] == 0:
+            zones[0] = (state.stick_left, zones[0][1])
+        if runs[-1][1] == mem.q.size:
+            zones[-1] = (zones[-1][0], state.stick_right)
+        return zones
 
     def station_states(self, state: ContactState, x: np.ndarray, q: np.ndarray) -> np.ndarray:
         """Out of contact / stick / forward / backward slip at surface points, from the cells."""
