@@ -200,6 +200,7 @@ class _Outcome:
     iterations: int
     residual: float
     message: str = ""
+    slipping: tuple = (False, False)  # whether (S1) says the left / right contact edge slips in the step
 
 
 class GeneralSolver(TangentialSolver):
@@ -443,7 +444,7 @@ class GeneralSolver(TangentialSolver):
             coarse = None
         if mem.normal is not None and fine.regime != Regime.GROSS_SLIDING:
             # a slip zone narrower than a cell: (S1) says an edge slips whose end cell stuck
-            reach = _unresolved_reach(N1, loads0, loads1, self.f, fine.memory.status, h)
+            reach = _unresolved_reach(fine.slipping, fine.memory.status, h)
             if reach > 0.0:
                 error = max(error if math.isfinite(error) else 0.0, reach / W)
         memory = dataclasses.replace(fine.memory, error=error, coarse=coarse)
@@ -560,7 +561,7 @@ class GeneralSolver(TangentialSolver):
             a, b = max(_runs(stick), key=lambda r: r[1] - r[0])
             widest = _run_edges(x, q, qmax, status, N1, h, a, b - 1, slipping)
         return _Outcome(memory, shift, dissipation, edges, widest, regime, bool(np.any(slip)), iterations, residual,
-                        message)
+                        message, slipping)
 
     def _active_set(self, lat: ToeplitzLattice, n: int, r: np.ndarray, qmax: np.ndarray, total: float,
                     status: np.ndarray, gscale: float, floor: float = 0.0):
@@ -1000,10 +1001,10 @@ def _slope_kinks(profile) -> tuple[np.ndarray, bool]:
     return np.zeros(0), False
 
 
-def _unresolved_reach(N1: NormalSolution, loads0: Loads, loads1: Loads, f: float,
-                      status: np.ndarray, h: float) -> float:
+def _unresolved_reach(slipping: tuple, status: np.ndarray, h: float) -> float:
     """How far a stick edge may be from where the lattice puts it at contact edges whose end cell
-    stuck although (S1) says the edge slips [m] (0 where there is none).
+    stuck although (S1) says the edge slips (``slipping``, left and right, :func:`_slipping_edges`)
+    [m] (0 where there is none).
 
     physics.md (S1): an edge of the contact (half-width d) sticks through a
     small step only if abs(u) < f v, u = dQ -+ (pi/4) d dsigma, v = dP -+ 2 dM0 / d
@@ -1018,7 +1019,7 @@ def _unresolved_reach(N1: NormalSolution, loads0: Loads, loads1: Loads, f: float
     as the next stick run, and that distance is the reach.
     """
     reach = 0.0
-    for side, slips in zip((-1, 1), _slipping_edges(N1, loads0, loads1, f)):
+    for side, slips in zip((-1, 1), slipping):
         cells = status if side < 0 else status[::-1]
         if not (slips and cells[0] == 0):
             continue
