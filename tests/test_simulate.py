@@ -93,11 +93,13 @@ def test_general_run_says_when_its_slip_zones_are_under_resolved():
     no cell slips, but (S1) fails at both edges: every step of the Q ramp is a
     partial slip whose slip zones lie within the end cells (placed there since
     0.3.2; until then the steps said "stick") and reports an error estimate of at
-    least one cell (1/64 of the width) although the two lattices agree. At 512 nodes the zones span 2-5 cells, below
+    least SUBCELL_PLACEMENT of a cell (0.2 / 64 of the width; a whole cell until
+    0.3.3) although the two lattices agree. At 512 nodes the zones span 2-5 cells, below
     RESOLVED_SPACINGS: the widest is recorded and the messages say so; at 1024
     it spans twice as many cells (the edges are placed to ~0.1 cell: 10 %).
     """
     from halfslip.simulator import RESOLVED_SPACINGS
+    from halfslip.solvers.general import SUBCELL_PLACEMENT
 
     text = """
 name: narrow-slip
@@ -117,7 +119,7 @@ output: {fields: []}
     assert np.all((blind.stick_left.values[ramp] > blind.contact_left.values[ramp])
                   & (blind.stick_right.values[ramp] < blind.contact_right.values[ramp]))
     assert np.all(blind.dissipation.values == 0.0)  # no cell slipped
-    assert np.all(blind.error_estimate.values[ramp] >= 1.0 / 64)
+    assert np.all(blind.error_estimate.values[ramp] >= SUBCELL_PLACEMENT / 64)
     assert np.all(blind.error_estimate.values[~ramp] == 0.0)
     coarse = hs.simulate(hs.parse_scene(text), nodes=512)
     fine = hs.simulate(hs.parse_scene(text), nodes=1024)

@@ -108,6 +108,14 @@ EPS = float(np.finfo(float).eps)
 #: percentile, while the distance to the shadow lattice's edges fell to 0.003 of a cell (error / that
 #: distance up to 39); with this floor error / estimate is at most 1.7 there.
 EDGE_PLACEMENT = 0.1
+#: How well a slip zone narrower than its end cell is placed within it, in cells: the floor of the edge
+#: error estimate where (S1) says a contact edge slips but its end cell sticks (_run_edges places the
+#: zone where (x - E) m^2 extrapolates to zero). Measured: J1 at Q = 0.001 .. 0.06 f P (60 loads, 128 /
+#: 256 / 1024 nodes, both profiles) at most 0.18 of a cell; the dovetail after its load reversals, where
+#: the zones are 0.04 .. 0.17 of a cell at 1000 nodes and the extrapolation puts them at zero width,
+#: 0.17 against 8000 nodes. Until 0.3.3 such steps were raised to a whole cell (5x what was measured;
+#: the dovetail's median estimate was one cell against a median error of 0.1 cell).
+SUBCELL_PLACEMENT = 0.2
 #: A stick run at a contact edge that (S1) says slips, this many cells wide or less, is an island that the
 #: shadow lattice (cells twice as wide) cannot confirm: two of its cells. On the random histories at 1024
 #: nodes such runs were 1-11 cells wide (Hertz) and 1 or >= 96 (punch); one of 3 cells at a receding
@@ -940,7 +948,11 @@ def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
     slipping neighbour's). A stick run reaching the end cell ends at the
     contact edge, unless (S1) says that edge slips (``slipping``, left and right): then the slip
     zone is narrower than the end cell, and its edge c is where (x - E) m^2 (m = 1 - s q / (f cap),
-    E the contact edge) extrapolates to zero, as it does for the local Cattaneo solution.
+    E the contact edge) extrapolates to zero, as it does for the local Cattaneo solution. So too
+    when the end cell is the only slipping cell between the run and its contact edge (since
+    0.3.3): the traction margin's square, extrapolated from cells 1.5 and 2.5 cells in, stopped at
+    the end cell's centre there (a rounded punch under Q and sigma at 128 nodes: zones of 0.7 -
+    1.0 cell put at 0.5, 0.54 of a cell off; 0.21 so).
 
     Measured against J1 (Q = 0.001 .. 0.03 f P: slip zones of 0.1 to 8 cells at 128 / 1024
     nodes): largest error 0.68 / 0.51 cells (Hertz) and 0.32 / 0.68 (punch) with the end cell
@@ -972,6 +984,14 @@ def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
             m1 *= u0 + h
             w = u0 - m0 * h / (m1 - m0) if m1 > m0 else 0.0
             out.append(edge + step * min(max(w, 0.0), u0))
+            continue
+        if nb == 0 or nb == x.size - 1:
+            # a slip zone of about a cell, the end cell slipping: the local Cattaneo form, as for a
+            # zone within the end cell, between the end cell's centre and the stick cell's
+            u0 = abs(x[end] - edge)
+            m0, m1 = m0 * u0, m1 * (u0 + h)
+            w = u0 - m0 * h / (m1 - m0) if m1 > m0 else u0 - h
+            out.append(edge + step * min(max(w, u0 - h), u0))
             continue
         # the traction margin f cap - |q| vanishes like the square root of the distance to the stick edge
         m0 *= qmax[end] ** 2
@@ -1007,7 +1027,8 @@ def _unresolved_reach(slipping: tuple, status: np.ndarray, h: float) -> float:
     small step only if abs(u) < f v, u = dQ -+ (pi/4) d dsigma, v = dP -+ 2 dM0 / d
     (v > 0: the edge advances). A stationary or receding edge (v <= 0) with a
     shear drive (u != 0) slips. When that fails and the end cell still sticks,
-    either the slip zone there is narrower than a cell (one cell), or the
+    either the slip zone there is narrower than a cell and placed within it to
+    SUBCELL_PLACEMENT of a cell (the floor), or the
     stick run at the edge, if at most UNCONFIRMED_ISLAND cells wide, is an
     island that the continuous solution does not have (seen on the random
     histories: a 3-cell island left at a receding, slipping edge at 1024
@@ -1020,7 +1041,7 @@ def _unresolved_reach(slipping: tuple, status: np.ndarray, h: float) -> float:
         cells = status if side < 0 else status[::-1]
         if not (slips and cells[0] == 0):
             continue
-        reach = max(reach, h)
+        reach = max(reach, SUBCELL_PLACEMENT * h)
         gap = np.flatnonzero(cells != 0)
         if gap.size:
             beyond = np.flatnonzero(cells[gap[0]:] == 0)
