@@ -728,7 +728,7 @@ def test_slip_zone_narrower_than_a_cell(kind, nodes):
             assert np.all(state.memory.status == 0) and state.dissipation == base.dissipation
             assert report.error_estimate >= general_module.SUBCELL_PLACEMENT * h / (2 * a)
         # the estimate bounds the error: measured error / estimate <= 1.15 over Q = 0.001 .. 0.06 f P
-        # at 128 .. 1024 nodes (the floors: 0.1 cell, 0.2 where the zone is within the end cell)
+        # at 128 .. 1024 nodes with a floor of 0.2 cell where the zone is within the end cell (0.5 since)
         error = max(abs(state.stick_right - b), abs(state.stick_left + b)) / (2 * a)
         assert error <= 1.5 * report.error_estimate, (ratio, error, report.error_estimate)
     assert worst < 0.3, worst

@@ -93,7 +93,7 @@ def test_general_run_says_when_its_slip_zones_are_under_resolved():
     no cell slips, but (S1) fails at both edges: every step of the Q ramp is a
     partial slip whose slip zones lie within the end cells (placed there since
     0.3.2; until then the steps said "stick") and reports an error estimate of at
-    least SUBCELL_PLACEMENT of a cell (0.2 / 64 of the width; a whole cell until
+    least SUBCELL_PLACEMENT of a cell (half of 1/64 of the width; a whole cell until
     0.3.3) although the two lattices agree. At 512 nodes the zones span 2-5 cells, below
     RESOLVED_SPACINGS: the widest is recorded and the messages say so; at 1024
     it spans twice as many cells (the edges are placed to ~0.1 cell: 10 %).

@@ -108,14 +108,15 @@ EPS = float(np.finfo(float).eps)
 #: percentile, while the distance to the shadow lattice's edges fell to 0.003 of a cell (error / that
 #: distance up to 39); with this floor error / estimate is at most 1.7 there.
 EDGE_PLACEMENT = 0.1
-#: How well a slip zone narrower than its end cell is placed within it, in cells: the floor of the edge
-#: error estimate where (S1) says a contact edge slips but its end cell sticks (_run_edges places the
-#: zone where (x - E) m^2 extrapolates to zero). Measured: J1 at Q = 0.001 .. 0.06 f P (60 loads, 128 /
-#: 256 / 1024 nodes, both profiles) at most 0.18 of a cell; the dovetail after its load reversals, where
-#: the zones are 0.04 .. 0.17 of a cell at 1000 nodes and the extrapolation puts them at zero width,
-#: 0.17 against 8000 nodes. Until 0.3.3 such steps were raised to a whole cell (5x what was measured;
-#: the dovetail's median estimate was one cell against a median error of 0.1 cell).
-SUBCELL_PLACEMENT = 0.2
+#: How well a slip zone of at most about a cell is placed, in cells: the floor of the edge error estimate
+#: where (S1) says a contact edge slips but its end cell sticks, or where the end cell alone slips (both
+#: placed by the local Cattaneo form, _run_edges; the shadow lattice places them the same way, so the two
+#: lattices' distance says nothing there). Measured: J1 at Q = 0.001 .. 0.06 f P (60 loads, 128 / 256 /
+#: 1024 nodes, both profiles) at most 0.18 of a cell; but the dovetail (examples/dovetail.yaml, last
+#: cycle, against 16000 nodes) after its load maximum, where P falls and the edges recede while slipping
+#: and the lattice sees no slipping cell, 0.23 .. 0.48 of a cell at 1000 nodes (0.36 at 2000): the local
+#: form is not that of a receding edge. Until 0.3.3 such steps were raised to a whole cell.
+SUBCELL_PLACEMENT = 0.5
 #: A stick run at a contact edge that (S1) says slips, this many cells wide or less, is an island that the
 #: shadow lattice (cells twice as wide) cannot confirm: two of its cells. On the random histories at 1024
 #: nodes such runs were 1-11 cells wide (Hertz) and 1 or >= 96 (punch); one of 3 cells at a receding
@@ -1028,7 +1029,8 @@ def _unresolved_reach(slipping: tuple, status: np.ndarray, h: float) -> float:
     (v > 0: the edge advances). A stationary or receding edge (v <= 0) with a
     shear drive (u != 0) slips. When that fails and the end cell still sticks,
     either the slip zone there is narrower than a cell and placed within it to
-    SUBCELL_PLACEMENT of a cell (the floor), or the
+    SUBCELL_PLACEMENT of a cell (the floor; so too a zone whose end cell alone
+    slips, placed by the same local form), or the
     stick run at the edge, if at most UNCONFIRMED_ISLAND cells wide, is an
     island that the continuous solution does not have (seen on the random
     histories: a 3-cell island left at a receding, slipping edge at 1024
@@ -1039,6 +1041,9 @@ def _unresolved_reach(slipping: tuple, status: np.ndarray, h: float) -> float:
     reach = 0.0
     for side, slips in zip((-1, 1), slipping):
         cells = status if side < 0 else status[::-1]
+        if cells.size > 1 and cells[0] != 0 and cells[1] == 0:
+            # the end cell alone slips: that edge too is placed by the local Cattaneo form (_run_edges)
+            reach = max(reach, SUBCELL_PLACEMENT * h)
         if not (slips and cells[0] == 0):
             continue
         reach = max(reach, SUBCELL_PLACEMENT * h)
