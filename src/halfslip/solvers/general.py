@@ -963,7 +963,8 @@ def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
     out = []
     for end, step, edge, open_ in ((i, 1, N.left, slipping[0]), (k, -1, N.right, slipping[1])):
         nb = end - step
-        if nb < 0 or nb >= x.size:
+        within = nb < 0 or nb >= x.size  # the run reaches the end cell
+        if within:
             if not open_:
                 out.append(edge)
                 continue
@@ -977,22 +978,16 @@ def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
         else:
             m1 = m0
         m0, m1 = max(m0, 0.0) ** 2, max(m1, 0.0) ** 2
-        if nb < 0 or nb >= x.size:
-            # a slip zone narrower than the end cell: near a contact edge E, (x - E) m^2 = x - c for the
-            # local Cattaneo solution (m^2 = (x - c) / (x - E)); its zero from the two outermost cells
+        if within or nb == 0 or nb == x.size - 1:
+            # a slip zone within the end cell, or of about a cell (the end cell nb alone slips): near a
+            # contact edge E, (x - E) m^2 = x - c for the local Cattaneo solution (m^2 = (x - c) / (x - E));
+            # its zero from the two outermost stick cells, between the first of them and the contact edge
+            # (within) or the slipping end cell's centre
             u0 = abs(x[end] - edge)
-            m0 *= u0
-            m1 *= u0 + h
-            w = u0 - m0 * h / (m1 - m0) if m1 > m0 else 0.0
-            out.append(edge + step * min(max(w, 0.0), u0))
-            continue
-        if nb == 0 or nb == x.size - 1:
-            # a slip zone of about a cell, the end cell slipping: the local Cattaneo form, as for a
-            # zone within the end cell, between the end cell's centre and the stick cell's
-            u0 = abs(x[end] - edge)
+            lower = 0.0 if within else u0 - h
             m0, m1 = m0 * u0, m1 * (u0 + h)
-            w = u0 - m0 * h / (m1 - m0) if m1 > m0 else u0 - h
-            out.append(edge + step * min(max(w, u0 - h), u0))
+            w = u0 - m0 * h / (m1 - m0) if m1 > m0 else lower
+            out.append(edge + step * min(max(w, lower), u0))
             continue
         # the traction margin f cap - |q| vanishes like the square root of the distance to the stick edge
         m0 *= qmax[end] ** 2
