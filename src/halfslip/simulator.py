@@ -78,6 +78,12 @@ class SaveAt:
         return i % self.every == 0 or i == n
 
 
+#: Most normal solutions contact_edges keeps for the general solver to reuse: about 0.9 kB each (90 MB at
+#: most). A periodic history has a cycle's worth of distinct (P, M) (the dovetail 132); a load table up to
+#: one per row, and beyond this many its later steps solve as before.
+KEPT_NORMALS = 100_000
+
+
 @dataclass(frozen=True, eq=False)
 class ContactEdges:
     """Contact edges of a history's distinct loads (P, M) with P > 0, one normal solve each.
@@ -88,12 +94,17 @@ class ContactEdges:
         The distinct (P, M) samples of the history with P > 0, in the order they first occur.
     left, right : ndarray, shape (k,)
         Contact edges under each of them [m].
+    solutions : dict
+        The normal solutions themselves, keyed by (P, M) as floats, for the
+        first KEPT_NORMALS samples: the general solver takes them instead of
+        solving again at the steps that end on them.
     """
 
     P: np.ndarray = field(repr=False)
     M: np.ndarray = field(repr=False)
     left: np.ndarray = field(repr=False)
     right: np.ndarray = field(repr=False)
+    solutions: dict = field(default_factory=dict, repr=False)
 
     @property
     def extent(self) -> tuple[float, float]:
@@ -124,11 +135,14 @@ def contact_edges(scene, problem: NormalProblem) -> ContactEdges | None:
     _, first = np.unique(loads, axis=0, return_index=True)
     loads = loads[np.sort(first)]
     left, right = np.empty(len(loads)), np.empty(len(loads))
+    solutions = {}
     sol = None
     for k, (P, M) in enumerate(loads):
         sol = problem.solve(P, M, near=sol)
         left[k], right[k] = sol.left, sol.right
-    return ContactEdges(loads[:, 0], loads[:, 1], left, right)
+        if k < KEPT_NORMALS:
+            solutions[(float(P), float(M))] = sol
+    return ContactEdges(loads[:, 0], loads[:, 1], left, right, solutions)
 
 
 def _closed_form(scene) -> bool:
@@ -168,7 +182,8 @@ def build_method(scene, name: str, problem: NormalProblem, stations: np.ndarray 
     from .solvers.general import GeneralSolver
 
     return GeneralSolver(problem, scene.friction, scene.solver.nodes, stations=stations,
-                         width=reference_width(scene, problem, edges), travel=scene.solver.edge_travel)
+                         width=reference_width(scene, problem, edges), travel=scene.solver.edge_travel,
+                         normals=None if edges is None else edges.solutions)
 
 
 def reference_width(scene, problem: NormalProblem, edges: ContactEdges | None = None) -> float | None:
