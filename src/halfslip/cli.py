@@ -421,6 +421,11 @@ def summarize(result, path) -> list[str]:
         row = table.isel(cycle=-1)
         where = f"last full cycle, t = {float(row.t_start):g} .. {float(row.t_stop):g} s"
         if np.isfinite(float(zone["left"])):
+            errors = (float(zone["left_error"]), float(zone["right_error"]))
+            if all(np.isfinite(errors)) and max(errors) > 0.0:
+                # the ends come from single instants, often load extremes: say how well they are placed
+                where += (f"; ends set at t = {float(zone['t_left']):g} / {float(zone['t_right']):g} s, "
+                          f"edge error estimates {quantity(errors[0], 'm')} / {quantity(errors[1], 'm')}")
             lines.append(f"  permanent stick zone {interval(float(zone['left']), float(zone['right']), 'm')} ({where})")
         else:
             lines.append(f"  permanent stick zone: none, no point sticks throughout the {where}")

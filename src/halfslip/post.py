@@ -40,6 +40,7 @@ never the other way round). The helpers the figures need are public here:
 """
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -559,21 +560,42 @@ above the first step's slope (the loop's width is 3 % of the elastic shift).
 def permanent_stick(ds: xr.Dataset, cycle: int | None = -1, period: float | None = None) -> xr.Dataset:
     """The permanent stick zone of a cycle: the intersection of its stick zones.
 
+    Each end is the stick edge of one instant of the cycle (for the left end
+    the instant whose stick zone starts furthest right), usually a load
+    extreme, where the edge can be ill-conditioned; ``t_left`` / ``t_right``
+    say which instants, and ``left_error`` / ``right_error`` the stick-edge
+    error estimate the solver reported there (``error_estimate`` times the
+    contact width; 0 for the exact method, NaN for a result without the
+    variable; since 0.3.3).
+
     Returns
     -------
     xarray.Dataset
         Scalars ``left``, ``right`` [m] (NaN when some instant of the cycle
-        has no stick zone, or the intersection is empty) and ``half_width``
-        [m] = (right - left)/2.
+        has no stick zone, or the intersection is empty), ``half_width``
+        [m] = (right - left)/2, ``t_left``, ``t_right`` [s] and
+        ``left_error``, ``right_error`` [m] (NaN with the ends).
     """
     check_result(ds)
     window = select_cycle(ds, cycle, period)
-    left, right = _cycles.stick_intersection(window["stick_left"].values, window["stick_right"].values)
+    sl, sr = window["stick_left"].values, window["stick_right"].values
+    left, right = _cycles.stick_intersection(sl, sr)
+    t_ends, errors = [math.nan, math.nan], [math.nan, math.nan]
+    if math.isfinite(left):
+        width = (window["contact_right"] - window["contact_left"]).values
+        estimate = window["error_estimate"].values if "error_estimate" in window else np.full(sl.size, math.nan)
+        for k, i in enumerate((int(np.argmax(sl)), int(np.argmin(sr)))):
+            t_ends[k] = float(window["t"].values[i])
+            errors[k] = float(estimate[i] * width[i])
     return xr.Dataset(
         {
             "left": ((), left, _attrs("m", "left edge of the permanent stick zone")),
             "right": ((), right, _attrs("m", "right edge of the permanent stick zone")),
             "half_width": ((), 0.5 * (right - left), _attrs("m", "half-width of the permanent stick zone")),
+            "t_left": ((), t_ends[0], _attrs("s", "instant whose stick zone sets the left edge")),
+            "t_right": ((), t_ends[1], _attrs("s", "instant whose stick zone sets the right edge")),
+            "left_error": ((), errors[0], _attrs("m", "stick-edge error estimate at t_left")),
+            "right_error": ((), errors[1], _attrs("m", "stick-edge error estimate at t_right")),
         },
         attrs={"cycle": window.attrs["selection"]},
     )
