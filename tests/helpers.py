@@ -107,6 +107,20 @@ solver: {skip_steady_cycles: false}
 output: {fields: [p, q, slip], points: 81}
 """
 
+#: A rounded punch (the dovetail's) pressed, then Q and sigma raised together: slip zones that grow from a
+#: fraction of a cell to about one cell at 64 .. 128 nodes, within about 1 % of the width.
+NARROW_SLIP_SCENE = """
+name: narrow-slip
+material: {E: 115.0e9, nu: 0.3}
+friction: 0.6
+geometry: {kind: rounded_punch, flat_half_width: 2.0e-3, radius: 10.0e-3}
+loads:
+  - ramp: {to: {P: 2.0e5}, duration: 1.0, steps: 4}
+  - ramp: {to: {Q: 6.0e4, sigma: 1.0e7}, duration: 1.0, steps: 8}
+solver: {method: general}
+output: {fields: []}
+"""
+
 
 def as_from_a_terminal() -> None:
     """In a child process (``preexec_fn``): Ctrl-C delivered as at a terminal.

@@ -734,19 +734,6 @@ def test_slip_zone_narrower_than_a_cell(kind, nodes):
     assert worst < 0.3, worst
 
 
-NARROW_SLIP_SCENE = """
-name: narrow-slip
-material: {E: 115.0e9, nu: 0.3}
-friction: 0.6
-geometry: {kind: rounded_punch, flat_half_width: 2.0e-3, radius: 10.0e-3}
-loads:
-  - ramp: {to: {P: 2.0e5}, duration: 1.0, steps: 4}
-  - ramp: {to: {Q: 6.0e4, sigma: 1.0e7}, duration: 1.0, steps: 8}
-solver: {method: general}
-output: {fields: []}
-"""
-
-
 def test_slip_zone_of_about_a_cell():
     """A rounded punch under Q and sigma at 128 nodes: the slip zones grow from 0.1 to 1.2 cells, through
     the end cell. Where the end cell is the only slipping cell the edge is placed by the local
@@ -758,8 +745,8 @@ def test_slip_zone_of_about_a_cell():
     """
     import halfslip as hs
 
-    reference = hs.simulate(hs.parse_scene(NARROW_SLIP_SCENE), nodes=2048)
-    run = hs.simulate(hs.parse_scene(NARROW_SLIP_SCENE), nodes=128)
+    reference = hs.simulate(hs.parse_scene(helpers.NARROW_SLIP_SCENE), nodes=2048)
+    run = hs.simulate(hs.parse_scene(helpers.NARROW_SLIP_SCENE), nodes=128)
     ramp = run.step.values > 4
     W = (reference.contact_right - reference.contact_left).values[ramp]
     error = np.maximum(abs(run.stick_left - reference.stick_left),

@@ -12,6 +12,8 @@ from click.testing import CliRunner
 import halfslip as hs
 from halfslip.cli import main
 
+from helpers import NARROW_SLIP_SCENE
+
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 INTERFACE_VARIABLES = [
     "P", "Q", "M", "sigma", "contact_left", "contact_right", "stick_left", "stick_right",
@@ -101,18 +103,7 @@ def test_general_run_says_when_its_slip_zones_are_under_resolved():
     from halfslip.simulator import RESOLVED_SPACINGS
     from halfslip.solvers.general import SUBCELL_PLACEMENT
 
-    text = """
-name: narrow-slip
-material: {E: 115.0e9, nu: 0.3}
-friction: 0.6
-geometry: {kind: rounded_punch, flat_half_width: 2.0e-3, radius: 10.0e-3}
-loads:
-  - ramp: {to: {P: 2.0e5}, duration: 1.0, steps: 4}
-  - ramp: {to: {Q: 6.0e4, sigma: 1.0e7}, duration: 1.0, steps: 8}
-solver: {method: general, nodes: 64}
-output: {fields: []}
-"""
-    blind = hs.simulate(hs.parse_scene(text))
+    blind = hs.simulate(hs.parse_scene(NARROW_SLIP_SCENE), nodes=64)
     ramp = blind.step.values > 4
     assert np.all(blind.regime.values[1:][~ramp[1:]] == 1)  # Regime.STICK while P rises alone
     assert np.all(blind.regime.values[ramp] == 2)  # Regime.PARTIAL_SLIP
@@ -121,8 +112,8 @@ output: {fields: []}
     assert np.all(blind.dissipation.values == 0.0)  # no cell slipped
     assert np.all(blind.error_estimate.values[ramp] >= SUBCELL_PLACEMENT / 64)
     assert np.all(blind.error_estimate.values[~ramp] == 0.0)
-    coarse = hs.simulate(hs.parse_scene(text), nodes=512)
-    fine = hs.simulate(hs.parse_scene(text), nodes=1024)
+    coarse = hs.simulate(hs.parse_scene(NARROW_SLIP_SCENE), nodes=512)
+    fine = hs.simulate(hs.parse_scene(NARROW_SLIP_SCENE), nodes=1024)
     spacings = coarse.attrs["widest_slip_zone_spacings"]
     assert 0.0 < spacings < RESOLVED_SPACINGS
     assert "lattice spacings" in coarse.attrs["messages"]
