@@ -243,8 +243,8 @@ class GeneralSolver(TangentialSolver):
         start-up solved each distinct sample of the history,
         ``simulator.contact_edges``): a (sub-)step ending on one of them
         takes it instead of solving again (the dovetail: 591 -> 141 normal
-        solves, 132 of them at start-up). They agree with the step's own warm-started solve to the
-        normal solver's tolerance.
+        solves, 132 of them at start-up). They agree with the step's own
+        warm-started solve to the normal solver's tolerance.
 
     Attributes
     ----------
@@ -963,7 +963,7 @@ def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
     when the end cell is the only slipping cell between the run and its contact edge (since
     0.3.3): the traction margin's square, extrapolated from cells 1.5 and 2.5 cells in, stopped at
     the end cell's centre there (a rounded punch under Q and sigma at 128 nodes: zones of 0.7 -
-    1.0 cell put at 0.5, 0.54 of a cell off; 0.21 so).
+    1.0 cell put at 0.5, 0.54 of a cell off; 0.22 so).
 
     Measured against J1 (Q = 0.001 .. 0.03 f P: slip zones of 0.1 to 8 cells at 128 / 1024
     nodes): largest error 0.68 / 0.51 cells (Hertz) and 0.32 / 0.68 (punch) with the end cell
