@@ -210,6 +210,7 @@ class _Outcome:
     residual: float
     message: str = ""
     slipping: tuple = (False, False)  # whether (S1) says the left / right contact edge slips in the step
+    bracketed: bool = False  # an outermost stick edge put midway between a stick and a slip cell (_run_edges)
 
 
 class GeneralSolver(TangentialSolver):
@@ -464,6 +465,8 @@ class GeneralSolver(TangentialSolver):
         if mem.normal is not None and fine.regime != Regime.GROSS_SLIDING:
             # a slip zone narrower than a cell: (S1) says an edge slips whose end cell stuck
             reach = _unresolved_reach(fine.slipping, fine.memory.status, h)
+            if fine.bracketed:  # an edge between two cells' centres, at their midpoint: half a cell at most
+                reach = max(reach, 0.5 * h)
             if reach > 0.0:
                 error = max(error if math.isfinite(error) else 0.0, reach / W)
         memory = dataclasses.replace(fine.memory, error=error, coarse=coarse)
@@ -564,11 +567,13 @@ class GeneralSolver(TangentialSolver):
         memory = GeneralMemory(N1, h, first, _frozen(status), _frozen(q), _frozen(g), _frozen(G), _frozen(cap),
                                shift)
         slipping = _slipping_edges(N1, loads0, loads1, f) if mem.normal is not None else (False, False)
+        bracketed = False
         if not np.any(slip):
             regime, edges = Regime.STICK, (N1.left, N1.right)
             if any(slipping):
                 # (S1): an edge slips, over less than its end cell (which sticks)
-                edges = _run_edges(x, q, qmax, status, N1, h, 0, n - 1, slipping)
+                *edges, _ = _run_edges(x, q, qmax, status, N1, h, 0, n - 1, slipping)
+                edges = tuple(edges)
                 if edges != (N1.left, N1.right):
                     regime = Regime.PARTIAL_SLIP
             widest = edges
@@ -578,11 +583,12 @@ class GeneralSolver(TangentialSolver):
         else:
             runs = _runs(stick)
             regime = Regime.PARTIAL_SLIP
-            edges = _run_edges(x, q, qmax, status, N1, h, runs[0][0], runs[-1][1] - 1, slipping)
+            *edges, bracketed = _run_edges(x, q, qmax, status, N1, h, runs[0][0], runs[-1][1] - 1, slipping)
+            edges = tuple(edges)
             a, b = max(runs, key=lambda r: r[1] - r[0])
-            widest = edges if len(runs) == 1 else _run_edges(x, q, qmax, status, N1, h, a, b - 1, slipping)
+            widest = edges if len(runs) == 1 else _run_edges(x, q, qmax, status, N1, h, a, b - 1, slipping)[:2]
         return _Outcome(memory, shift, dissipation, edges, widest, regime, bool(np.any(slip)), iterations, residual,
-                        message, slipping)
+                        message, slipping, bracketed)
 
     def _active_set(self, lat: ToeplitzLattice, n: int, r: np.ndarray, qmax: np.ndarray, total: float,
                     status: np.ndarray, gscale: float, floor: float = 0.0):
@@ -691,7 +697,7 @@ class GeneralSolver(TangentialSolver):
         if not runs:
             return []
         qmax = self.f * mem.capacity
-        zones = [_run_edges(mem.x, mem.q, qmax, mem.status, mem.normal, mem.spacing, a, b - 1) for a, b in runs]
+        zones = [_run_edges(mem.x, mem.q, qmax, mem.status, mem.normal, mem.spacing, a, b - 1)[:2] for a, b in runs]
         if runs[0][0] == 0:
             zones[0] = (state.stick_left, zones[0][1])
         if runs[-1][1] == mem.q.size:
@@ -951,12 +957,19 @@ def _check(q, qmax, s, status, force, Q, fP, qscale, gscale, floor=0.0) -> float
 
 
 def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
-               slipping=(False, False)) -> tuple[float, float]:
+               slipping=(False, False)) -> tuple[float, float, bool]:
     """Edges of the stick run of cells i..k (the outermost stick points for the first and last stuck
-    cells), within the cell: the traction margin f cap - s q of the outermost stick cells vanishes
-    like the square root of the distance to the edge, so its square is extrapolated linearly from
-    the two outermost stick cells (clipped to the half-cells between the stick cell's centre and its
-    slipping neighbour's). A stick run reaching the end cell ends at the
+    cells), within the cell, and whether an edge was only bracketed (below): the traction margin
+    f cap - s q of the outermost stick cells vanishes like the square root of the distance to the
+    edge, so its square is extrapolated linearly from the two outermost stick cells, to a zero
+    between the stick cell's centre and its slipping neighbour's. Where the zero would fall beyond
+    the neighbour's centre, the margin does not grow inwards like the square root (a band of cells
+    within a small fraction of their bound, as before a load maximum, or a margin an earlier slip
+    left): the edge is then bracketed by the two centres and put midway, at most half a cell from
+    either (since 0.3.3; until then at the neighbour's centre: the dovetail at 1000 nodes, against
+    16000, 95th percentile of the edge error 0.67 -> 0.38 of a cell, largest 0.84 -> 0.47; the
+    random punch histories at 1024 nodes 95th percentile 4.0e-4 -> 3.4e-4 of the width; J1 and J2
+    unchanged). A stick run reaching the end cell ends at the
     contact edge, unless (S1) says that edge slips (``slipping``, left and right): then the slip
     zone is narrower than the end cell, and its edge c is where (x - E) m^2 (m = 1 - s q / (f cap),
     E the contact edge) extrapolates to zero, as it does for the local Cattaneo solution. So too
@@ -971,6 +984,7 @@ def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
     traction margin's square instead of m^2 took the punch's largest error from 0.43 to 0.15 cells
     (Hertz 0.19 -> 0.16)."""
     out = []
+    bracketed = False
     for end, step, edge, open_ in ((i, 1, N.left, slipping[0]), (k, -1, N.right, slipping[1])):
         nb = end - step
         within = nb < 0 or nb >= x.size  # the run reaches the end cell
@@ -1003,9 +1017,15 @@ def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
         m0 *= qmax[end] ** 2
         m1 *= (qmax[inner] if 0 <= inner < x.size else qmax[end]) ** 2
         frac = m0 / (m1 - m0) if m1 > m0 else 1.0
-        frac = min(max(frac, 0.0), 1.0)
+        if frac >= 1.0:
+            # the margin does not grow inwards as the square root would (an ill-conditioned band of cells
+            # near their bound, or a margin left by an earlier slip): the edge lies between the two
+            # centres, and their midpoint is at most half a cell from it
+            frac = 0.5
+            bracketed = True
+        frac = max(frac, 0.0)
         out.append(x[end] - step * frac * h)
-    return out[0], out[1]
+    return out[0], out[1], bracketed
 
 
 def _slope_kinks(profile) -> tuple[np.ndarray, bool]:
