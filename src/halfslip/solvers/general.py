@@ -462,8 +462,9 @@ class GeneralSolver(TangentialSolver):
             shear = _shear_apart(fine.memory, coarse) / (self.f * loads1.P)
         elif not self.estimate:
             coarse = None
-        if mem.normal is not None and fine.regime != Regime.GROSS_SLIDING:
-            # a slip zone narrower than a cell: (S1) says an edge slips whose end cell stuck
+        if fine.regime != Regime.GROSS_SLIDING:
+            # slip zones of about a cell or less, placed by the local Cattaneo form ((S1) needs the step's
+            # start: fine.slipping is (False, False) on a contact's first step), and edges only bracketed
             reach = _unresolved_reach(fine.slipping, fine.memory.status, h)
             if fine.bracketed:  # an edge between two cells' centres, at their midpoint: half a cell at most
                 reach = max(reach, 0.5 * h)
