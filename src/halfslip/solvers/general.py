@@ -210,7 +210,7 @@ class _Outcome:
     residual: float
     message: str = ""
     slipping: tuple = (False, False)  # whether (S1) says the left / right contact edge slips in the step
-    bracketed: bool = False  # an outermost stick edge put midway between a stick and a slip cell (_run_edges)
+    bracketed: bool = False  # an outermost or widest-interval stick edge put midway between a stick and a slip cell
 
 
 class GeneralSolver(TangentialSolver):
@@ -587,7 +587,11 @@ class GeneralSolver(TangentialSolver):
             *edges, bracketed = _run_edges(x, q, qmax, status, N1, h, runs[0][0], runs[-1][1] - 1, slipping)
             edges = tuple(edges)
             a, b = max(runs, key=lambda r: r[1] - r[0])
-            widest = edges if len(runs) == 1 else _run_edges(x, q, qmax, status, N1, h, a, b - 1, slipping)[:2]
+            if len(runs) == 1:
+                widest = edges
+            else:  # the estimate covers the widest interval too (its spread over sub-steps, _finish)
+                *widest, inner = _run_edges(x, q, qmax, status, N1, h, a, b - 1, slipping)
+                widest, bracketed = tuple(widest), bracketed or inner
         return _Outcome(memory, shift, dissipation, edges, widest, regime, bool(np.any(slip)), iterations, residual,
                         message, slipping, bracketed)
 
