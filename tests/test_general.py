@@ -877,7 +877,7 @@ def test_an_edge_whose_margin_does_not_grow_is_put_between_the_cells():
     outermost cells, which vanishes linearly at the edge; where that zero would lie beyond the slipping
     neighbour's centre (the margin does not grow inwards, as in a band of cells just under their bound
     before a load maximum) the edge is put midway between the stick and the slip cell's centres and
-    reported as bracketed (since 0.3.3; it went to the slip cell's centre, up to 0.84 of a cell from the
+    reported as placed to half a cell (since 0.3.3; it went to the slip cell's centre, up to 0.84 of a cell from the
     converged edge on the dovetail at 1000 nodes, 0.47 since). Cells of width 1, the run 3..12 of 16,
     cells 0..2 and 13..15 slipping forwards (q = cap)."""
     problem = NormalProblem(helpers.PROFILES["hertz"], A)
@@ -891,14 +891,14 @@ def test_an_edge_whose_margin_does_not_grow_is_put_between_the_cells():
     # and 0.2 outside cell 12's (right)
     for j, d in ((3, 0.3), (4, 1.3), (12, 0.2), (11, 1.2)):
         q[j] = cap[j] - math.sqrt(d)
-    left, right, bracketed = general_module._run_edges(x, q, cap, status, N, 1.0, 3, 12)
+    left, right, placement = general_module._run_edges(x, q, cap, status, N, 1.0, 3, 12)
     assert left == pytest.approx(x[3] - 0.3, abs=1e-12) and right == pytest.approx(x[12] + 0.2, abs=1e-12)
-    assert not bracketed
-    # a flat margin on the right (the same in cells 11 and 12): bracketed, midway between 12 and 13
+    assert placement == 0.0  # the square-root law: the step's EDGE_PLACEMENT floor is enough
+    # a flat margin on the right (the same in cells 11 and 12): bracketed, midway between 12 and 13, to half a cell
     q[11] = q[12] = cap[12] - 1e-3
-    left, right, bracketed = general_module._run_edges(x, q, cap, status, N, 1.0, 3, 12)
+    left, right, placement = general_module._run_edges(x, q, cap, status, N, 1.0, 3, 12)
     assert left == pytest.approx(x[3] - 0.3, abs=1e-12) and right == pytest.approx(x[12] + 0.5, abs=1e-12)
-    assert bracketed
+    assert placement == 0.5
 
 
 def test_bracketed_edges_on_the_dovetail():

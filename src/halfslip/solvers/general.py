@@ -110,7 +110,7 @@ EPS = float(np.finfo(float).eps)
 EDGE_PLACEMENT = 0.1
 #: How well a slip zone of at most about a cell is placed, in cells: the floor of the edge error estimate
 #: where (S1) says a contact edge slips but its end cell sticks, or where the end cell alone slips (both
-#: placed by the local Cattaneo form, _run_edges; the shadow lattice places them the same way, so the two
+#: placed by the local Cattaneo form, which reports it, _run_edges; the shadow lattice places them the same way, so the two
 #: lattices' distance says nothing there). Measured: J1 at Q = 0.001 .. 0.06 f P (60 loads, 128 / 256 /
 #: 1024 nodes, both profiles) at most 0.18 of a cell; but the dovetail (examples/dovetail.yaml, last
 #: cycle, against 16000 nodes) after its load maximum, where P falls and the edges recede while slipping
@@ -210,7 +210,7 @@ class _Outcome:
     residual: float
     message: str = ""
     slipping: tuple = (False, False)  # whether (S1) says the left / right contact edge slips in the step
-    bracketed: bool = False  # an outermost or widest-interval stick edge put midway between a stick and a slip cell
+    placement: float = 0.0  # how far, in cells, the placement rule puts the outermost / widest edges at most (_run_edges)
 
 
 class GeneralSolver(TangentialSolver):
@@ -463,11 +463,8 @@ class GeneralSolver(TangentialSolver):
         elif not self.estimate:
             coarse = None
         if fine.regime != Regime.GROSS_SLIDING:
-            # slip zones of about a cell or less, placed by the local Cattaneo form ((S1) needs the step's
-            # start: fine.slipping is (False, False) on a contact's first step), and edges only bracketed
-            reach = _unresolved_reach(fine.slipping, fine.memory.status, h)
-            if fine.bracketed:  # an edge between two cells' centres, at their midpoint: half a cell at most
-                reach = max(reach, 0.5 * h)
+            # edges placed by a local form or only bracketed (_run_edges), and islands (S1) doubts
+            reach = max(fine.placement * h, _unresolved_reach(fine.slipping, fine.memory.status, h))
             if reach > 0.0:
                 error = max(error if math.isfinite(error) else 0.0, reach / W)
         memory = dataclasses.replace(fine.memory, error=error, coarse=coarse)
@@ -568,12 +565,12 @@ class GeneralSolver(TangentialSolver):
         memory = GeneralMemory(N1, h, first, _frozen(status), _frozen(q), _frozen(g), _frozen(G), _frozen(cap),
                                shift)
         slipping = _slipping_edges(N1, loads0, loads1, f) if mem.normal is not None else (False, False)
-        bracketed = False
+        placement = 0.0
         if not np.any(slip):
             regime, edges = Regime.STICK, (N1.left, N1.right)
             if any(slipping):
                 # (S1): an edge slips, over less than its end cell (which sticks)
-                *edges, _ = _run_edges(x, q, qmax, status, N1, h, 0, n - 1, slipping)
+                *edges, placement = _run_edges(x, q, qmax, status, N1, h, 0, n - 1, slipping)
                 edges = tuple(edges)
                 if edges != (N1.left, N1.right):
                     regime = Regime.PARTIAL_SLIP
@@ -584,16 +581,16 @@ class GeneralSolver(TangentialSolver):
         else:
             runs = _runs(stick)
             regime = Regime.PARTIAL_SLIP
-            *edges, bracketed = _run_edges(x, q, qmax, status, N1, h, runs[0][0], runs[-1][1] - 1, slipping)
+            *edges, placement = _run_edges(x, q, qmax, status, N1, h, runs[0][0], runs[-1][1] - 1, slipping)
             edges = tuple(edges)
             a, b = max(runs, key=lambda r: r[1] - r[0])
             if len(runs) == 1:
                 widest = edges
             else:  # the estimate covers the widest interval too (its spread over sub-steps, _finish)
                 *widest, inner = _run_edges(x, q, qmax, status, N1, h, a, b - 1, slipping)
-                widest, bracketed = tuple(widest), bracketed or inner
+                widest, placement = tuple(widest), max(placement, inner)
         return _Outcome(memory, shift, dissipation, edges, widest, regime, bool(np.any(slip)), iterations, residual,
-                        message, slipping, bracketed)
+                        message, slipping, placement)
 
     def _active_set(self, lat: ToeplitzLattice, n: int, r: np.ndarray, qmax: np.ndarray, total: float,
                     status: np.ndarray, gscale: float, floor: float = 0.0):
@@ -962,9 +959,11 @@ def _check(q, qmax, s, status, force, Q, fP, qscale, gscale, floor=0.0) -> float
 
 
 def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
-               slipping=(False, False)) -> tuple[float, float, bool]:
+               slipping=(False, False)) -> tuple[float, float, float]:
     """Edges of the stick run of cells i..k (the outermost stick points for the first and last stuck
-    cells), within the cell, and whether an edge was only bracketed (below): the traction margin
+    cells), within the cell, and how far either may be from where it is put, in cells, where that is
+    more than the square-root law's EDGE_PLACEMENT (SUBCELL_PLACEMENT for the local Cattaneo form, half
+    a cell for a bracketed edge, below; 0 otherwise): the traction margin
     f cap - s q of the outermost stick cells vanishes like the square root of the distance to the
     edge, so its square is extrapolated linearly from the two outermost stick cells, to a zero
     between the stick cell's centre and its slipping neighbour's. Where the zero would fall beyond
@@ -989,7 +988,7 @@ def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
     traction margin's square instead of m^2 took the punch's largest error from 0.43 to 0.15 cells
     (Hertz 0.19 -> 0.16)."""
     out = []
-    bracketed = False
+    placement = 0.0
     for end, step, edge, open_ in ((i, 1, N.left, slipping[0]), (k, -1, N.right, slipping[1])):
         nb = end - step
         within = nb < 0 or nb >= x.size  # the run reaches the end cell
@@ -1017,6 +1016,7 @@ def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
             m0, m1 = m0 * u0, m1 * (u0 + h)
             w = u0 - m0 * h / (m1 - m0) if m1 > m0 else lower
             out.append(edge + step * min(max(w, lower), u0))
+            placement = max(placement, SUBCELL_PLACEMENT)
             continue
         # the traction margin f cap - |q| vanishes like the square root of the distance to the stick edge
         m0 *= qmax[end] ** 2
@@ -1027,10 +1027,10 @@ def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
             # near their bound, or a margin left by an earlier slip): the edge lies between the two
             # centres, and their midpoint is at most half a cell from it
             frac = 0.5
-            bracketed = True
+            placement = max(placement, 0.5)
         frac = max(frac, 0.0)
         out.append(x[end] - step * frac * h)
-    return out[0], out[1], bracketed
+    return out[0], out[1], placement
 
 
 def _slope_kinks(profile) -> tuple[np.ndarray, bool]:
@@ -1050,33 +1050,28 @@ def _slope_kinks(profile) -> tuple[np.ndarray, bool]:
 
 
 def _unresolved_reach(slipping: tuple, status: np.ndarray, h: float) -> float:
-    """How far a stick edge may be from where the lattice puts it at contact edges whose end cell
-    stuck although (S1) says the edge slips (``slipping``, left and right, :func:`_slipping_edges`)
-    [m] (0 where there is none).
+    """How far a stick edge may be from where the lattice puts it at a contact edge whose stick run
+    may be an island (``slipping``, left and right, :func:`_slipping_edges`) [m] (0 where there is
+    none).
 
     physics.md (S1): an edge of the contact (half-width d) sticks through a
     small step only if abs(u) < f v, u = dQ -+ (pi/4) d dsigma, v = dP -+ 2 dM0 / d
     (v > 0: the edge advances). A stationary or receding edge (v <= 0) with a
     shear drive (u != 0) slips. When that fails and the end cell still sticks,
-    either the slip zone there is narrower than a cell and placed within it to
-    SUBCELL_PLACEMENT of a cell (the floor; so too a zone whose end cell alone
-    slips, placed by the same local form), or the
-    stick run at the edge, if at most UNCONFIRMED_ISLAND cells wide, is an
-    island that the continuous solution does not have (seen on the random
-    histories: a 3-cell island left at a receding, slipping edge at 1024
-    nodes, gone at 2048, 0.2 of the width outside the stick run that follows
-    it; the shadow lattice had it too): then the stick edge may be as far in
-    as the next stick run, and that distance is the reach.
+    either the slip zone there is narrower than a cell (_run_edges places it
+    within the end cell and says how well), or the stick run at the edge, if
+    at most UNCONFIRMED_ISLAND cells wide, is an island that the continuous
+    solution does not have (seen on the random histories: a 3-cell island
+    left at a receding, slipping edge at 1024 nodes, gone at 2048, 0.2 of the
+    width outside the stick run that follows it; the shadow lattice had it
+    too): then the stick edge may be as far in as the next stick run, and
+    that distance is the reach.
     """
     reach = 0.0
     for side, slips in zip((-1, 1), slipping):
         cells = status if side < 0 else status[::-1]
-        if cells.size > 1 and cells[0] != 0 and cells[1] == 0:
-            # the end cell alone slips: that edge too is placed by the local Cattaneo form (_run_edges)
-            reach = max(reach, SUBCELL_PLACEMENT * h)
         if not (slips and cells[0] == 0):
             continue
-        reach = max(reach, SUBCELL_PLACEMENT * h)
         gap = np.flatnonzero(cells != 0)
         if gap.size:
             beyond = np.flatnonzero(cells[gap[0]:] == 0)
