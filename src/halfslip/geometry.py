@@ -59,6 +59,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import NamedTuple
 
+import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import CubicSpline
@@ -371,8 +372,6 @@ def _span(profile: Profile) -> tuple[float, float]:
 # ---------------------------------------------------------------------------
 
 
-#: points x knots evaluated at once by ``_ContactPressure.load_to`` (tabulated profiles: thousands of knots)
-_LOAD_TO_BLOCK = 1 << 20
 _N_COS = 6  # cos(m theta), m = 0..5: enough for h' (degree 2) x cos(2 theta) and h'' x cos(3 theta)
 
 
@@ -482,7 +481,8 @@ def _chebyshev_moments(pieces: _SlopePieces, center: FloatArray, half_width: Flo
 # ---------------------------------------------------------------------------
 
 
-def _log_kernel(x: FloatArray, knot: FloatArray, left: ArrayLike, right: ArrayLike, d: ArrayLike) -> FloatArray:
+@numba.njit(cache=True, error_model="numpy")
+def _log_term(x, knot, left, right, d):  # pragma: no cover - compiled
     """L = ln| (1 - s t + sqrt(1 - s^2) sqrt(1 - t^2)) / (t - s) |, s and t the normalised x and knot.
 
     -L / sqrt(1 - s^2) is an antiderivative in t of 1 / ((t - s) sqrt(1 - t^2))
@@ -490,10 +490,89 @@ def _log_kernel(x: FloatArray, knot: FloatArray, left: ArrayLike, right: ArrayLi
     cancellation when the contact barely passes a knot). Infinite where
     x == knot.
     """
-    root = np.sqrt((right - x) * (x - left) * (right - knot) * (knot - left))
-    near = np.where(knot > x, (right - knot) * (x - left), (knot - left) * (right - x))
+    root = math.sqrt((right - x) * (x - left) * (right - knot) * (knot - left))
+    near = (right - knot) * (x - left) if knot > x else (knot - left) * (right - x)
+    return math.log1p((near + root) / (d * abs(knot - x)))
+
+
+@numba.vectorize(["float64(float64, float64, float64, float64, float64)"], cache=True)
+def _log_ufunc(x, knot, left, right, d):  # pragma: no cover - compiled
+    return _log_term(x, knot, left, right, d)
+
+
+def _log_kernel(x: FloatArray, knot: FloatArray, left: ArrayLike, right: ArrayLike, d: ArrayLike) -> FloatArray:
+    """``_log_term`` broadcast over its arguments (infinite where x == knot, without a warning)."""
     with np.errstate(divide="ignore", invalid="ignore"):
-        return np.log1p((near + root) / (d * np.abs(knot - x)))
+        return _log_ufunc(x, knot, left, right, d)
+
+
+@numba.njit(cache=True)
+def _load_to_terms(x, x0, d, c0, c1, knots, jumps, magnitude):  # pragma: no cover - compiled
+    """The sum (and with ``magnitude`` the sum of the absolute values) of the terms of
+    ``_ContactPressure.load_to`` at each of ``x`` (flat), before the factor d / (pi A); see there."""
+    n, K = x.size, knots.size
+    left, right = x0 - d, x0 + d
+    total = np.empty(n)
+    size = np.zeros(n)
+    # the knots' coefficients: V / v = b0 + b1 s + b2 s^2, sqrt(1 - t^2) from the distances to the edges (1 - t^2
+    # cancels for a knot near an edge: a lightly loaded punch's flat ends)
+    a0 = np.empty(K)
+    a1 = np.empty(K)
+    a2 = np.empty(K)
+    b0 = np.empty(K)
+    b1 = np.empty(K)
+    b2 = np.empty(K)
+    root_k = np.empty(K)
+    for k in range(K):
+        t = (knots[k] - x0) / d
+        a0[k] = jumps[k, 0]
+        a1[k] = jumps[k, 1] * d
+        a2[k] = jumps[k, 2] * d * d
+        b0[k] = a0[k] - 0.5 * a1[k] * t + a2[k] * t * t / 3.0
+        b1[k] = 0.5 * a1[k] - 2.0 * a2[k] * t / 3.0
+        b2[k] = a2[k] / 3.0
+        root_k[k] = math.sqrt(max((right - knots[k]) * (knots[k] - left), 0.0)) / d
+    for i in range(n):
+        xc = min(max(x[i], left), right)
+        legs_r = math.sqrt(max(right - xc, 0.0))
+        legs_l = math.sqrt(max(xc - left, 0.0))
+        theta = 2.0 * math.atan2(legs_l, legs_r)  # arccos(-s), accurate at both edges
+        sin = legs_l * legs_r / d  # sqrt(1 - s^2)
+        cos = -(xc - x0) / d
+        tot = c0 * 0.5 * (theta - cos * sin) - c1 * sin ** 3 / 3.0
+        if magnitude:
+            size[i] = abs(c0 * 0.5 * theta) + abs(c0 * 0.5 * cos * sin) + abs(c1 * sin ** 3 / 3.0)
+        second = 0.5 * (theta + cos * sin)
+        for k in range(K):
+            kn = knots[k]
+            v = (xc - kn) / d
+            LV = 0.0
+            if v != 0.0:
+                V = v * (a0[k] + v * (0.5 * a1[k] + v * a2[k] / 3.0))
+                LV = _log_term(xc, kn, left, right, d) * V
+            moments = b0[k] * theta - b1[k] * sin + b2[k] * second
+            tot += LV + root_k[k] * moments
+            if magnitude:
+                size[i] += abs(LV) + root_k[k] * (abs(b0[k] * theta) + abs(b1[k] * sin) + abs(b2[k] * second))
+        total[i] = tot
+    return total, size
+
+
+@numba.njit(cache=True)
+def _pressure_terms(x, x0, d, c0, c1, knots, jumps):  # pragma: no cover - compiled
+    """pi A p at each of ``x`` (inside the contact): sqrt(1 - s^2) (c0 + c1 s) + sum_k L(x, knot_k) jump_k(x)
+    (see ``_ContactPressure``; a knot's own term is 0 on it, where L is infinite)."""
+    left, right = x0 - d, x0 + d
+    out = np.empty(x.size)
+    for i in range(x.size):
+        xi = x[i]
+        tot = math.sqrt((right - xi) * (xi - left)) / d * (c0 + c1 * (xi - x0) / d)
+        for k in range(knots.size):
+            u = xi - knots[k]
+            if u != 0.0:
+                tot += (jumps[k, 0] + u * (jumps[k, 1] + u * jumps[k, 2])) * _log_term(xi, knots[k], left, right, d)
+        out[i] = tot
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -581,53 +660,12 @@ class _ContactPressure:
         boundary once).
         """
         x = np.asarray(x, dtype=float)
-        x0, d = self.center, self.half_width
-        left, right = x0 - d, x0 + d
-        xc = np.clip(x, left, right)
-        s = (xc - x0) / d
-        legs_r, legs_l = _half_angle_legs(xc, left, right)
-        theta = 2.0 * np.arctan2(legs_l, legs_r)  # arccos(-s), accurate at both edges
-        sin = legs_l * legs_r / d  # sqrt(1 - s^2)
-        cos = -s
-        c0, c1 = self.smooth
-        total = c0 * 0.5 * (theta - cos * sin) - c1 * sin**3 / 3.0  # int sqrt(1 - s'^2) (c0 + c1 s') ds'
-        size = np.abs(c0 * 0.5 * theta) + np.abs(c0 * 0.5 * cos * sin) + np.abs(c1 * sin**3 / 3.0)
-        second = 0.5 * (theta + cos * sin)  # int s'^2 / sqrt(1 - s'^2) ds'
-        if self.knots.size:
-            t_all = (self.knots - x0) / d
-            # sqrt(1 - t^2) from the distances to the edges: 1 - t^2 cancels for a knot near an edge (a
-            # lightly loaded punch: the flat's ends), and the terms it multiplies nearly cancel c0's
-            root_all = np.sqrt(np.maximum((right - self.knots) * (self.knots - left), 0.0)) / d
-            flat = xc.reshape(-1)
-            knots_total = np.zeros(flat.size)
-            knots_size = np.zeros(flat.size)
-            a0 = self.jumps[:, 0]
-            a1 = self.jumps[:, 1] * d
-            a2 = self.jumps[:, 2] * d * d
-            # V / v = b0 + b1 s + b2 s^2
-            b0 = a0 - 0.5 * a1 * t_all + a2 * t_all * t_all / 3.0
-            b1 = 0.5 * a1 - 2.0 * a2 * t_all / 3.0
-            b2 = a2 / 3.0
-            step = max(1, _LOAD_TO_BLOCK // self.knots.size)
-            for i in range(0, flat.size, step):  # blocks: (points x knots) stays bounded for tabulated profiles
-                xb = flat[i:i + step, None]
-                v = (xb - self.knots) / d
-                V = v * (a0 + v * (0.5 * a1 + v * a2 / 3.0))
-                with np.errstate(invalid="ignore"):
-                    L = _log_kernel(xb, self.knots, left, right, d)
-                    LV = np.where(v == 0.0, 0.0, L * V)
-                th = theta.reshape(-1)[i:i + step, None]
-                sn = sin.reshape(-1)[i:i + step, None]
-                sq = second.reshape(-1)[i:i + step, None]
-                moments = b0 * th - b1 * sn + b2 * sq
-                knots_total[i:i + step] = np.sum(LV + root_all * moments, axis=1)
-                if magnitude:
-                    knots_size[i:i + step] = np.sum(np.abs(LV) + root_all * (np.abs(b0 * th) + np.abs(b1 * sn)
-                                                                             + np.abs(b2 * sq)), axis=1)
-            total = total + knots_total.reshape(xc.shape)
-            size = size + knots_size.reshape(xc.shape)
-        scale = d / (math.pi * self.compliance)
-        return (total * scale, size * scale) if magnitude else total * scale
+        total, size = _load_to_terms(np.ascontiguousarray(x.reshape(-1)), self.center, self.half_width,
+                                     self.smooth[0], self.smooth[1], np.ascontiguousarray(self.knots, dtype=float),
+                                     np.ascontiguousarray(self.jumps, dtype=float).reshape(-1, 3), magnitude)
+        scale = self.half_width / (math.pi * self.compliance)
+        total = total.reshape(x.shape) * scale
+        return (total, size.reshape(x.shape) * scale) if magnitude else total
 
     def __call__(self, x: ArrayLike) -> FloatArray:
         x = np.asarray(x, dtype=float)
@@ -635,15 +673,9 @@ class _ContactPressure:
         left, right = x0 - d, x0 + d
         out = np.zeros(x.shape)
         inside = (x > left) & (x < right)
-        xi = x[inside]
-        s = (xi - x0) / d
-        total = np.sqrt((right - xi) * (xi - left)) / d * (self.smooth[0] + self.smooth[1] * s)
-        if self.knots.size:
-            u = xi[:, None] - self.knots
-            jump = self.jumps[:, 0] + u * (self.jumps[:, 1] + u * self.jumps[:, 2])
-            L = _log_kernel(xi[:, None], self.knots, left, right, d)
-            with np.errstate(invalid="ignore"):  # 0 * inf on a knot, where the term is 0
-                total = total + np.sum(np.where(u == 0.0, 0.0, jump * L), axis=1)
+        total = _pressure_terms(np.ascontiguousarray(x[inside]), x0, d, self.smooth[0], self.smooth[1],
+                                np.ascontiguousarray(self.knots, dtype=float),
+                                np.ascontiguousarray(self.jumps, dtype=float).reshape(-1, 3))
         out[inside] = total / (math.pi * self.compliance)
         return out
 

@@ -139,13 +139,8 @@ class EdgePath:
             return -a, a
         if self._kind == "formation":
             mu = np.sqrt(np.clip((lam - self.lam_lo) / (1.0 - self.lam_lo), 0.0, 1.0))
-            diff = mu[..., None] - self._mu
-            exact = np.isclose(diff, 0.0, atol=1e-15)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                w = self._bary / diff
-            w = np.where(exact.any(axis=-1, keepdims=True), exact.astype(float), w)
-            out = (w @ self._edges) / w.sum(axis=-1, keepdims=True)
-            return out[..., 0], out[..., 1]
+            left, right = _barycentric(np.ascontiguousarray(mu).reshape(-1), self._mu, self._bary, self._edges)
+            return left.reshape(lam.shape), right.reshape(lam.shape)
         s = lam[..., None]
         h00 = (1 + 2 * s) * (1 - s) ** 2
         h10 = s * (1 - s) ** 2
@@ -328,6 +323,33 @@ def _hermite_arrivals(v0, dh, v1, r, lam_lo, ext, margin, steps, newton):  # pra
                 break
         out[i] = lam
     return out
+
+
+@numba.njit(cache=True)
+def _barycentric(mu, nodes, weights, values):  # pragma: no cover - compiled
+    """The barycentric interpolant through (``nodes``, ``values`` (n, 2)) at each of ``mu`` (flat): the
+    formation path's left and right edges (a node within 1e-15 takes its value)."""
+    left = np.empty(mu.size)
+    right = np.empty(mu.size)
+    for i in range(mu.size):
+        at = -1
+        for j in range(nodes.size):
+            if abs(mu[i] - nodes[j]) <= 1e-15:
+                at = j
+                break
+        if at >= 0:
+            left[i] = values[at, 0]
+            right[i] = values[at, 1]
+            continue
+        num0 = num1 = den = 0.0
+        for j in range(nodes.size):
+            w = weights[j] / (mu[i] - nodes[j])
+            num0 += w * values[j, 0]
+            num1 += w * values[j, 1]
+            den += w
+        left[i] = num0 / den
+        right[i] = num1 / den
+    return left, right
 
 
 def _quadratic_roots(a: float, b: float, c: float) -> list[float]:
