@@ -283,7 +283,8 @@ def _stick_solve(lat: ToeplitzLattice, runs, n: int, rhs: np.ndarray) -> np.ndar
 RUNS = {
     "one": [(10, 90)],
     "schur": [(0, 40), (50, 120), (130, 131), (140, 200)],          # gaps of 28 cells: Schur complement
-    "cg": [(0, 30), (100, 229), (290, 300)],                         # gaps of 131 cells: CG, short runs dense
+    "islands": [(0, 5), (100, 229), (290, 291)],                     # 6 cells beside the longest run: Schur
+    "cg": [(0, 30), (100, 229), (260, 290)],                         # gaps of 102, 60 others: CG, short runs dense
     "cg-long": [(0, 140), (200, 300)],                               # CG with FFT solves on both runs
 }
 

@@ -141,13 +141,8 @@ class EdgePath:
             mu = np.sqrt(np.clip((lam - self.lam_lo) / (1.0 - self.lam_lo), 0.0, 1.0))
             left, right = _barycentric(np.ascontiguousarray(mu).reshape(-1), self._mu, self._bary, self._edges)
             return left.reshape(lam.shape), right.reshape(lam.shape)
-        s = lam[..., None]
-        h00 = (1 + 2 * s) * (1 - s) ** 2
-        h10 = s * (1 - s) ** 2
-        h01 = s * s * (3 - 2 * s)
-        h11 = s * s * (s - 1)
-        out = h00 * self._h0 + h10 * self._v0 + h01 * self._h1 + h11 * self._v1
-        return out[..., 0], out[..., 1]
+        left, right = _hermite_edges(np.ascontiguousarray(lam).reshape(-1), self._h0, self._v0, self._h1, self._v1)
+        return left.reshape(lam.shape), right.reshape(lam.shape)
 
     def arrival(self, x: np.ndarray, side: int) -> np.ndarray:
         """Fraction lam_x at which each point of ``x`` (shape (n,)) enters the contact.
@@ -220,26 +215,6 @@ class EdgePath:
                                 EXTREMUM_MARGIN, BISECTION_STEPS, NEWTON_STEPS)
         return lam.reshape(x.shape)
 
-    def _gap(self, x: np.ndarray, lam_x: np.ndarray, back: np.ndarray, side: int) -> np.ndarray:
-        """x - e(lam_x - back) of the ``side`` hermite edge e, shape (n, k), lam_x the arrival of x.
-
-        As (x - e(lam_x)) + back D, D the divided difference of the cubic
-        between lam_x - back and lam_x, with x - e(lam_x) = 0 where lam_x is a
-        crossing: relative accuracy up to lam_x, where ``edges`` (and
-        lam_x - back rounded) leave an error of eps |e| that the arrival
-        integral (inverse square root at lam_x) felt at 1e-6.
-        """
-        (v0, dh, v1), h0, _ = self._side(side)
-        c2, c3 = 3.0 * dh - 2.0 * v0 - v1, v0 - 2.0 * dh + v1
-        a = lam_x[:, None]
-        b = a - back
-        D = v0 + c2 * (a + b) + c3 * (a * a + a * b + b * b)
-        at = side * (h0 - x)
-        gx = _depth(side * v0, side * dh, side * v1, at, lam_x)
-        noise = 16.0 * np.finfo(float).eps * (np.abs(at) + abs(v0) + abs(dh) + abs(v1))
-        gx = np.where(np.abs(gx) <= noise, 0.0, gx)
-        return (-side * gx)[:, None] + back * D
-
 
 def _depth(v0, dh, v1, r, s):
     """g(s) = side (e(s) - x) of a hermite edge, given r = side (h0 - x) and side (v0, h1 - h0, v1).
@@ -260,6 +235,65 @@ def _slope(v0, dh, v1, s):
 
 _depth_c = numba.njit(cache=True)(_depth)
 _slope_c = numba.njit(cache=True)(_slope)
+
+
+@numba.njit(cache=True)
+def _hermite_edges(lam, h0, v0, h1, v1):  # pragma: no cover - compiled
+    """Left and right edges at each of ``lam`` (flat): the cubic Hermite interpolant of the ends ``h0``,
+    ``h1`` (left, right) and rates ``v0``, ``v1``."""
+    left = np.empty(lam.size)
+    right = np.empty(lam.size)
+    for i in range(lam.size):
+        s = lam[i]
+        h00 = (1 + 2 * s) * (1 - s) ** 2
+        h10 = s * (1 - s) ** 2
+        h01 = s * s * (3 - 2 * s)
+        h11 = s * s * (s - 1)
+        left[i] = h00 * h0[0] + h10 * v0[0] + h01 * h1[0] + h11 * v1[0]
+        right[i] = h00 * h0[1] + h10 * v0[1] + h01 * h1[1] + h11 * v1[1]
+    return left, right
+
+
+@numba.njit(cache=True)
+def _hermite_gap(x, lam_x, back, side, h0, v0, dh, v1):  # pragma: no cover - compiled
+    """x - e(lam_x - back) of the ``side`` hermite edge e (start h0, rates v0, v1, motion dh), shape (n, k),
+    lam_x the arrival of x.
+
+    As (x - e(lam_x)) + back D, D the divided difference of the cubic
+    between lam_x - back and lam_x, with x - e(lam_x) = 0 where lam_x is a
+    crossing: relative accuracy up to lam_x, where :meth:`EdgePath.edges`
+    (and lam_x - back rounded) leave an error of eps |e| that the arrival
+    integral (inverse square root at lam_x) felt at 1e-6.
+    """
+    c2, c3 = 3.0 * dh - 2.0 * v0 - v1, v0 - 2.0 * dh + v1
+    noise0 = 16.0 * np.finfo(np.float64).eps
+    out = np.empty(back.shape)
+    for i in range(x.size):
+        a = lam_x[i]
+        at = side * (h0 - x[i])
+        gx = _depth_c(side * v0, side * dh, side * v1, at, a)
+        if abs(gx) <= noise0 * (abs(at) + abs(v0) + abs(dh) + abs(v1)):
+            gx = 0.0
+        for j in range(back.shape[1]):
+            b = a - back[i, j]
+            out[i, j] = -side * gx + back[i, j] * (v0 + c2 * (a + b) + c3 * (a * a + a * b + b * b))
+    return out
+
+
+@numba.njit(cache=True)
+def _strain_sum(x, left, right, gl, gr, span, u, w, side_A, dQ, dS):  # pragma: no cover - compiled
+    """The arrival integral at each of ``x``, from the edges (n, k) at the nodes lam_x - span u^2 and
+    the gaps gl = x - left, gr = x - right there (see :func:`arrival_strains`)."""
+    out = np.zeros(x.size)
+    for i in range(x.size):
+        tot = 0.0
+        for j in range(u.size):
+            root = math.sqrt(abs(gl[i, j] * gr[i, j]))
+            if root > 0.0:
+                s = x[i] - 0.5 * (left[i, j] + right[i, j])
+                tot += 2.0 * span[i] * u[j] * w[j] / root * (dQ / math.pi + 0.25 * dS * s)
+        out[i] = side_A * tot
+    return out
 
 
 @numba.njit(cache=True)
@@ -391,13 +425,7 @@ def arrival_strains(path: EdgePath, x: np.ndarray, side: int, compliance: float)
     left, right = path.edges(lam)
     gl, gr = x[:, None] - left, x[:, None] - right
     if path._kind == "hermite":
-        if side < 0:
-            gl = path._gap(x, lam_x, back, side)
-        else:
-            gr = path._gap(x, lam_x, back, side)
-    root = np.sqrt(np.abs(gl * gr))
-    s = x[:, None] - 0.5 * (left + right)
-    weight = 2.0 * span[:, None] * _U * _W
-    with np.errstate(divide="ignore", invalid="ignore"):
-        kernel = np.where(root > 0.0, weight / root, 0.0) * (compliance * side)
-    return kernel @ np.full(_U.shape, dQ / math.pi) + (kernel * s).sum(axis=1) * (0.25 * dS)
+        (v0, dh, v1), h0, _ = path._side(side)
+        gap = _hermite_gap(x, lam_x, back, side, h0, v0, dh, v1)
+        gl, gr = (gap, gr) if side < 0 else (gl, gap)
+    return _strain_sum(x, left, right, gl, gr, span, _U, _W, compliance * side, dQ, dS)

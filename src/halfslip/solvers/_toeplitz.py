@@ -144,9 +144,10 @@ GENERATORS = 256
 #: per-call costs up to here.
 DENSE_CELLS = 128
 
-#: Solve a stick set of several runs through the Schur complement of the gaps between them while the
-#: gaps hold at most this many cells (the complement is dense: GAP_CELLS^2 numbers, one solve per gap
-#: cell); wider gaps separate few runs, for which block-Jacobi CG converges in a few iterations.
+#: Solve a stick set of several runs exactly through a Schur complement while the gaps between them, or
+#: the runs other than the longest, hold at most this many cells (the complement is dense: GAP_CELLS^2
+#: numbers, one more column of a solve per cell); otherwise few, long runs far apart, for which
+#: block-Jacobi CG converges in a few iterations.
 GAP_CELLS = 48
 
 
@@ -274,18 +275,31 @@ class ToeplitzLattice:
                    max_iter: int = 200) -> tuple[np.ndarray, int]:
         """T_SS^-1 rhs on the stick set S = union of ``runs`` (half-open (start, stop) in 0..n).
 
-        One run: a direct Gohberg-Semencul solve. Several runs with at most
-        GAP_CELLS cells between them: exactly, by the Schur complement of the
-        gaps Z in the spanning run (T_SS^-1 b = (T^-1 b~ - X C^-1 (T^-1 b~)_Z)_S,
-        X = T^-1 E_Z, C = X_Z, all solves on the span). Otherwise: conjugate
-        gradients preconditioned with the exact solve of every run (block
-        Jacobi; the runs are then few and far apart, so few iterations), the
-        products with T over the n cells by FFT. ``rhs`` has shape (|S|, k).
+        One run: a direct Gohberg-Semencul solve. Several runs: exactly,
+        through a Schur complement, while the cells it needs are at most
+        GAP_CELLS, whichever is smaller of
+
+        * the gaps Z between the runs, in the spanning run
+          (T_SS^-1 b = (T^-1 b~ - X C^-1 (T^-1 b~)_Z)_S, X = T^-1 E_Z, C = X_Z,
+          all solves on the span);
+        * the cells I of the runs other than the longest run R (islands beside
+          a stick zone): with X = T_RR^-1 [T_RI, b_R] (one solve on R),
+          y_I = (T_II - T_IR X_1)^-1 (b_I - T_IR X_2), y_R = X_2 - X_1 y_I.
+
+        Otherwise: conjugate gradients preconditioned with the exact solve of
+        every run (block Jacobi; the runs are then few, long and far apart, so
+        few iterations), the products with T over the n cells by FFT. ``rhs``
+        has shape (|S|, k).
 """
         if len(runs) == 1:
             return self.solve(runs[0][1] - runs[0][0], rhs), 0
         a, b = runs[0][0], runs[-1][1]
         gaps = np.concatenate([np.arange(runs[i][1], runs[i + 1][0]) for i in range(len(runs) - 1)]) - a
+        lengths = [stop - start for start, stop in runs]
+        longest = int(np.argmax(lengths))
+        islands = sum(lengths) - lengths[longest]
+        if islands < gaps.size and islands <= GAP_CELLS:
+            return self._island_solve(runs, longest, rhs), 0
         if gaps.size <= GAP_CELLS:
             m = b - a
             stick = np.ones(m, bool)
@@ -300,6 +314,26 @@ class ToeplitzLattice:
             Y = Y - X @ np.linalg.solve(C, Y[gaps])
             return Y[stick], 0
         return self._cg_runs(runs, n, rhs, tol, max_iter)
+
+    def _island_solve(self, runs, longest, rhs):
+        """T_SS^-1 rhs by the Schur complement of the cells outside run ``longest`` (see :meth:`solve_runs`)."""
+        cells = np.concatenate([np.arange(start, stop) for start, stop in runs])
+        start, stop = runs[longest]
+        first = sum(b - a for a, b in runs[:longest])  # the rows of R in S
+        rows = np.arange(first, first + stop - start)
+        others = np.setdiff1d(np.arange(cells.size), rows, assume_unique=True)
+        inner = self._kernel_to(int(np.max(cells) - np.min(cells)) + 1)
+        main, isl = cells[rows], cells[others]
+        T_RI = inner[np.abs(main[:, None] - isl[None, :])]
+        T_II = inner[np.abs(isl[:, None] - isl[None, :])]
+        k = isl.size
+        X = self.solve(main.size, np.concatenate((T_RI, rhs[rows]), axis=1))
+        X1, X2 = X[:, :k], X[:, k:]
+        y_I = np.linalg.solve(T_II - T_RI.T @ X1, rhs[others] - T_RI.T @ X2)
+        out = np.empty(rhs.shape)
+        out[rows] = X2 - X1 @ y_I
+        out[others] = y_I
+        return out
 
     def _cg_runs(self, runs, n, rhs, tol, max_iter):
         """Block-Jacobi preconditioned CG on the union of ``runs`` (see :meth:`solve_runs`).
