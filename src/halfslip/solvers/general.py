@@ -56,6 +56,7 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from ..geometry import NormalProblem, NormalSolution
@@ -541,7 +542,7 @@ class GeneralSolver(TangentialSolver):
         else:
             # a constant in r only shifts delta: take the common offset out (the locked displacements
             # carry the history's rigid slide, which may dwarf what the step changes)
-            r0 = float(np.median(r))
+            r0 = 0.5 * (float(np.min(r)) + float(np.max(r)))
             q, delta_int, status, Tq, iterations, restarts = self._active_set(
                 lat, n, r - r0, qmax, loads1.Q / h, status, A * float(qmax.max()) * h, ROUNDING * float(np.max(np.abs(r))))
             delta_int += r0
@@ -891,11 +892,27 @@ def _integrate(path: EdgePath, xs: np.ndarray, edge: float, side: int, A: float,
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     """Half-open (start, stop) of the runs of True in ``mask``."""
-    m = np.concatenate(([False], mask, [False])).astype(np.int8)
-    d = np.diff(m)
-    starts = np.flatnonzero(d == 1)
-    stops = np.flatnonzero(d == -1)
-    return list(zip(starts.tolist(), stops.tolist()))
+    return list(map(tuple, _run_bounds(np.ascontiguousarray(mask, dtype=np.bool_)).tolist()))
+
+
+@numba.njit(cache=True)
+def _run_bounds(mask):  # pragma: no cover - compiled
+    """(runs, 2) array of the half-open (start, stop) of the runs of True in ``mask``."""
+    out = np.empty((mask.size // 2 + 1, 2), np.int64)
+    k = 0
+    inside = False
+    for i in range(mask.size):
+        if mask[i] and not inside:
+            out[k, 0] = i
+            inside = True
+        elif not mask[i] and inside:
+            out[k, 1] = i
+            k += 1
+            inside = False
+    if inside:
+        out[k, 1] = mask.size
+        k += 1
+    return out[:k]
 
 
 def _reopen(status: np.ndarray, qmax: np.ndarray, total: float) -> np.ndarray:
