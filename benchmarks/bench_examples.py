@@ -1,0 +1,154 @@
+"""Wall time of the examples as a user runs them, and against an earlier version in the same run.
+
+    python benchmarks/bench_examples.py                       # this tree, 3 timed runs per example
+    python benchmarks/bench_examples.py --against e72f96e     # and that git revision, alternating
+
+Each example scene goes through ``halfslip.simulate`` (start-up, marching and
+the stored fields, as ``halfslip run`` does, without writing the file): one
+untimed run first (numba compiles and caches its kernels), then ``--repeat``
+timed runs; the table gives the median and the time per marched step. With
+``--against REV`` the same scenes run with the package of that revision (a
+temporary ``git worktree``, in a subprocess), the two alternating run by run,
+so that the ratio is measured in one session on one machine (the machines are
+shared and noisy: absolute times move by 10-20 % between sessions). Writes the
+table between the markers in docs/benchmarks.md.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+DOC = ROOT / "docs" / "benchmarks.md"
+BEGIN, END = "<!-- examples: begin -->", "<!-- examples: end -->"
+EXAMPLES = ["dovetail", "hertz_pad", "motor", "tabulated"]
+
+#: What a worker runs: one timed simulate of a scene, printed as JSON.
+_WORKER = """
+import json, sys, time
+import halfslip
+scene = halfslip.load_scene(sys.argv[1])
+t = time.perf_counter()
+result = halfslip.simulate(scene)
+wall = time.perf_counter() - t
+print(json.dumps({"wall": wall, "steps": int(result.attrs["count_steps"]), "method": str(result.attrs["method"]),
+                  "dissipation": float(result["dissipation"].values[-1])}))
+"""
+
+
+def _run(src: Path, scene: Path) -> dict:
+    env = dict(os.environ, PYTHONPATH=str(src), OPENBLAS_NUM_THREADS="1")
+    out = subprocess.run([sys.executable, "-c", _WORKER, str(scene)], env=env, capture_output=True, text=True,
+                         check=True, cwd=str(src.parent))
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def _median(values: list[float]) -> float:
+    values = sorted(values)
+    mid = len(values) // 2
+    return values[mid] if len(values) % 2 else 0.5 * (values[mid - 1] + values[mid])
+
+
+def measure(trees: dict[str, Path], repeat: int, examples: list[str]) -> dict:
+    """{example: {tree: {"wall": median s, "steps", "method", "dissipation"}}}, the trees alternating."""
+    out: dict = {}
+    for name in examples:
+        scene = ROOT / "examples" / f"{name}.yaml"
+        for src in trees.values():
+            _run(src, scene)  # compile and cache the kernels; warm the file cache
+        walls: dict[str, list[float]] = {label: [] for label in trees}
+        last: dict[str, dict] = {}
+        for _ in range(repeat):
+            for label, src in trees.items():
+                got = _run(src, scene)
+                walls[label].append(got["wall"])
+                last[label] = got
+        out[name] = {label: dict(last[label], wall=_median(walls[label]), walls=walls[label]) for label in trees}
+        line = "; ".join(f"{label} {out[name][label]['wall']:.3f} s" for label in trees)
+        print(f"{name}: {line}", flush=True)
+    return out
+
+
+def _machine() -> str:
+    import numba
+    import numpy
+    import scipy
+    return (f"{platform.system()} {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
+            f"numpy {numpy.__version__}, scipy {scipy.__version__}, numba {numba.__version__}")
+
+
+def write_doc(results: dict, trees: dict[str, Path], argv: list[str]) -> None:
+    labels = list(trees)
+    head = "| example | method | steps | " + " | ".join(f"{label} [s] | {label} [ms / step]" for label in labels)
+    sep = "|---|---|---:|" + "---:|---:|" * len(labels)
+    if len(labels) == 2:
+        head += f" | speed-up ({labels[0]} / {labels[1]}) | dissipation, relative difference"
+        sep += "---:|---:|"
+    rows = [head + " |", sep]
+    for name, by in results.items():
+        first = by[labels[0]]
+        cells = [name, first["method"], str(first["steps"])]
+        for label in labels:
+            cells += [f"{by[label]['wall']:.3f}", f"{1e3 * by[label]['wall'] / by[label]['steps']:.2f}"]
+        if len(labels) == 2:
+            a, b = by[labels[0]], by[labels[1]]
+            cells.append(f"{a['wall'] / b['wall']:.2f}x")
+            rel = abs(a["dissipation"] - b["dissipation"]) / max(abs(b["dissipation"]), 1e-300)
+            cells.append(f"{rel:.1e}")
+        rows.append("| " + " | ".join(cells) + " |")
+    text = "\n".join([
+        BEGIN,
+        f"`python benchmarks/{Path(__file__).name} {' '.join(argv)}`".replace(" `", "`"),
+        f"({time.strftime('%Y-%m-%d')}; {_machine()}; median of the timed runs, each a whole "
+        "`halfslip.simulate` with start-up and stored fields, the trees alternating run by run)"
+        if len(labels) == 2 else
+        f"({time.strftime('%Y-%m-%d')}; {_machine()}; median of the timed runs, each a whole "
+        "`halfslip.simulate` with start-up and stored fields)",
+        "",
+        *rows,
+        END,
+    ])
+    doc = DOC.read_text()
+    if BEGIN in doc:
+        doc = doc[:doc.index(BEGIN)] + text + doc[doc.index(END) + len(END):]
+    else:
+        doc = doc.rstrip() + "\n\n## Examples, wall time\n\n" + text + "\n"
+    DOC.write_text(doc)
+
+
+def main(argv=None) -> None:
+    argv = sys.argv[1:] if argv is None else argv
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--against", help="a git revision to time in the same run")
+    ap.add_argument("--examples", nargs="+", default=EXAMPLES, choices=EXAMPLES)
+    ap.add_argument("--no-doc", action="store_true")
+    args = ap.parse_args(argv)
+    trees = {"this tree": ROOT / "src"}
+    with tempfile.TemporaryDirectory() as tmp:
+        if args.against:
+            rev = subprocess.run(["git", "rev-parse", "--short", args.against], cwd=ROOT, capture_output=True,
+                                 text=True, check=True).stdout.strip()
+            where = Path(tmp) / rev
+            subprocess.run(["git", "worktree", "add", "--detach", str(where), rev], cwd=ROOT, check=True,
+                           capture_output=True)
+            trees = {rev: where / "src", "this tree": ROOT / "src"}
+        try:
+            results = measure(trees, args.repeat, args.examples)
+        finally:
+            if args.against:
+                subprocess.run(["git", "worktree", "remove", "--force", str(where)], cwd=ROOT, check=False,
+                               capture_output=True)
+    if not args.no_doc:
+        write_doc(results, trees, argv)
+
+
+if __name__ == "__main__":
+    main()
