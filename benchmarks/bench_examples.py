@@ -26,6 +26,9 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _doc import write_section  # noqa: E402
+
 DOC = ROOT / "docs" / "benchmarks.md"
 BEGIN, END = "<!-- examples: begin -->", "<!-- examples: end -->"
 EXAMPLES = ["dovetail", "hertz_pad", "motor", "tabulated"]
@@ -115,12 +118,7 @@ def write_doc(results: dict, trees: dict[str, Path], argv: list[str]) -> None:
         *rows,
         END,
     ])
-    doc = DOC.read_text()
-    if BEGIN in doc:
-        doc = doc[:doc.index(BEGIN)] + text + doc[doc.index(END) + len(END):]
-    else:
-        doc = doc.rstrip() + "\n\n## Examples, wall time\n\n" + text + "\n"
-    DOC.write_text(doc)
+    write_section(DOC, BEGIN, END, text, "Examples, wall time")
 
 
 def main(argv=None) -> None:

@@ -32,6 +32,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
 
+from _doc import write_section  # noqa: E402
 from random_histories import random_history  # noqa: E402
 
 REFERENCE = HERE / "reference" / "random_reference.npz"
@@ -197,12 +198,7 @@ def write_doc(rows, args, argv):
             f"machine: {machine()}. Seeds 0..{args.seeds - 1} per geometry (112 steps each); errors against "
             f"benchmarks/reference/random_reference.npz (edges relative to the contact width; dissipation "
             f"against the reference's Richardson value).\n\n{head}\n" + "\n".join(_fmt(r) for r in rows) + f"\n{END}")
-    doc = DOC.read_text()
-    if BEGIN in doc:
-        doc = doc[:doc.index(BEGIN)] + text + doc[doc.index(END) + len(END):]
-    else:
-        doc = doc.rstrip() + "\n\n## The general solver on random histories (issue 14)\n\n" + text + "\n"
-    DOC.write_text(doc)
+    write_section(DOC, BEGIN, END, text, "The general solver on random histories (issue 14)")
 
 
 if __name__ == "__main__":
