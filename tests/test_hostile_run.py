@@ -658,3 +658,40 @@ def test_in_process_commands_leave_the_signal_handlers_alone(cli, tmp_path):
     cli("validate", tmp_path / "missing.yaml")
     cli("frobnicate")
     assert {sig: signal.getsignal(sig) for sig in before} == before
+
+
+_CALLBACK_INTERRUPT = """
+import sys, time, weakref
+if sys.argv[1] == "hook":
+    import halfslip_launch
+    sys.unraisablehook = halfslip_launch._record_interrupts
+class Held:
+    pass
+held = Held()
+def callback(ref):
+    raise KeyboardInterrupt  # as a Ctrl-C that lands in a callback (the import system's module locks)
+ref = weakref.ref(held, callback)
+try:
+    del held
+    for _ in range(200):
+        time.sleep(0.001)
+    print("recorded" if sys.argv[1] == "hook" and halfslip_launch._lost else "carried on")
+except KeyboardInterrupt:
+    print("raised")
+"""
+
+
+@pytest.mark.parametrize("hook", ["hook", "python"])
+def test_an_interrupt_inside_a_callback_is_not_lost(hook):
+    """Python prints a KeyboardInterrupt raised inside a callback as 'Exception ignored' and carries on
+    (a Ctrl-C 0.3 s into start-up once finished the run with status 0); while the command imports, its
+    hook records it silently, and the command then ends as interrupted. The 'python' case shows what
+    happens without the hook, so that the test can fail."""
+    done = subprocess.run([sys.executable, "-c", _CALLBACK_INTERRUPT, hook], capture_output=True, text=True,
+                          timeout=60)
+    if hook == "hook":
+        assert done.stdout.strip() == "recorded", done.stderr
+        assert done.stderr == ""
+    else:
+        assert done.stdout.strip() == "carried on"
+        assert "KeyboardInterrupt" in done.stderr
