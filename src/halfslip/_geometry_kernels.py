@@ -1,0 +1,188 @@
+"""Compiled kernels of the normal problem (halfslip.geometry), imported where first used: importing numba
+and loading the kernels takes about 0.3 s, which commands that never solve a contact (validate, plot,
+--help) do not pay. Each is the one implementation of its formula; geometry's docstrings give the maths.
+"""
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _log_term(x, knot, left, right, d):  # pragma: no cover - compiled
+    """L = ln| (1 - s t + sqrt(1 - s^2) sqrt(1 - t^2)) / (t - s) |, s and t the normalised x and knot.
+
+    -L / sqrt(1 - s^2) is an antiderivative in t of 1 / ((t - s) sqrt(1 - t^2))
+    that vanishes at t = +-1. Written as log1p of a non-negative argument (no
+    cancellation when the contact barely passes a knot). Infinite where
+    x == knot.
+    """
+    root = math.sqrt((right - x) * (x - left) * (right - knot) * (knot - left))
+    near = (right - knot) * (x - left) if knot > x else (knot - left) * (right - x)
+    return math.log1p((near + root) / (d * abs(knot - x)))
+
+
+@numba.vectorize(cache=True)
+def _log_ufunc(x, knot, left, right, d):  # pragma: no cover - compiled
+    return _log_term(x, knot, left, right, d)
+
+
+@numba.njit(cache=True)
+def _load_to_terms(x, x0, d, c0, c1, knots, jumps, magnitude):  # pragma: no cover - compiled
+    """The sum (and with ``magnitude`` the sum of the absolute values) of the terms of
+    ``_ContactPressure.load_to`` at each of ``x`` (flat), before the factor d / (pi A); see there."""
+    n, K = x.size, knots.size
+    left, right = x0 - d, x0 + d
+    total = np.empty(n)
+    size = np.zeros(n)
+    # the knots' coefficients: V / v = b0 + b1 s + b2 s^2, sqrt(1 - t^2) from the distances to the edges (1 - t^2
+    # cancels for a knot near an edge: a lightly loaded punch's flat ends)
+    a0 = np.empty(K)
+    a1 = np.empty(K)
+    a2 = np.empty(K)
+    b0 = np.empty(K)
+    b1 = np.empty(K)
+    b2 = np.empty(K)
+    root_k = np.empty(K)
+    for k in range(K):
+        t = (knots[k] - x0) / d
+        a0[k] = jumps[k, 0]
+        a1[k] = jumps[k, 1] * d
+        a2[k] = jumps[k, 2] * d * d
+        b0[k] = a0[k] - 0.5 * a1[k] * t + a2[k] * t * t / 3.0
+        b1[k] = 0.5 * a1[k] - 2.0 * a2[k] * t / 3.0
+        b2[k] = a2[k] / 3.0
+        root_k[k] = math.sqrt(max((right - knots[k]) * (knots[k] - left), 0.0)) / d
+    for i in range(n):
+        xc = min(max(x[i], left), right)
+        legs_r = math.sqrt(max(right - xc, 0.0))
+        legs_l = math.sqrt(max(xc - left, 0.0))
+        theta = 2.0 * math.atan2(legs_l, legs_r)  # arccos(-s), accurate at both edges
+        sin = legs_l * legs_r / d  # sqrt(1 - s^2)
+        cos = -(xc - x0) / d
+        tot = c0 * 0.5 * (theta - cos * sin) - c1 * sin ** 3 / 3.0
+        if magnitude:
+            size[i] = abs(c0 * 0.5 * theta) + abs(c0 * 0.5 * cos * sin) + abs(c1 * sin ** 3 / 3.0)
+        second = 0.5 * (theta + cos * sin)
+        for k in range(K):
+            kn = knots[k]
+            v = (xc - kn) / d
+            LV = 0.0
+            if v != 0.0:
+                V = v * (a0[k] + v * (0.5 * a1[k] + v * a2[k] / 3.0))
+                LV = _log_term(xc, kn, left, right, d) * V
+            moments = b0[k] * theta - b1[k] * sin + b2[k] * second
+            tot += LV + root_k[k] * moments
+            if magnitude:
+                size[i] += abs(LV) + root_k[k] * (abs(b0[k] * theta) + abs(b1[k] * sin) + abs(b2[k] * second))
+        total[i] = tot
+    return total, size
+
+
+@numba.njit(cache=True)
+def _pressure_terms(x, x0, d, c0, c1, knots, jumps):  # pragma: no cover - compiled
+    """pi A p at each of ``x`` (inside the contact): sqrt(1 - s^2) (c0 + c1 s) + sum_k L(x, knot_k) jump_k(x)
+    (see ``_ContactPressure``; a knot's own term is 0 on it, where L is infinite)."""
+    left, right = x0 - d, x0 + d
+    out = np.empty(x.size)
+    for i in range(x.size):
+        xi = x[i]
+        tot = math.sqrt((right - xi) * (xi - left)) / d * (c0 + c1 * (xi - x0) / d)
+        for k in range(knots.size):
+            u = xi - knots[k]
+            if u != 0.0:
+                tot += (jumps[k, 0] + u * (jumps[k, 1] + u * jumps[k, 2])) * _log_term(xi, knots[k], left, right, d)
+        out[i] = tot
+    return out
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _cos_integrals(left, right, lower, upper):  # pragma: no cover - compiled
+    """int cos(m theta) dtheta, m = 0..5, over each piece [lower_j, upper_j] met by each contact
+    [left_b, right_b] (x = x0 + d cos(theta)), shape (B, J, 6).
+
+    With the half-angle legs (y, x) = (sqrt(right - xi), sqrt(xi - left)) of the piece's ends, theta(xi) / 2
+    = atan2(y, x) and y^2 + x^2 = 2 d: the piece's width w = theta(lower) - theta(upper) is one atan2 of
+    non-negative legs (no cancellation on thin pieces), and the integrals (2 / m) cos(m mid) sin(m w / 2),
+    mid = theta(lower) + theta(upper) over 2, come from the unit vectors of mid and w / 2 raised to the m-th
+    power: one transcendental per piece instead of thirteen.
+    """
+    B, J = left.size, lower.size
+    out = np.zeros((B, J, 6))
+    for b in range(B):
+        lo_b, hi_b = left[b], right[b]
+        two_d = hi_b - lo_b
+        for j in range(J):
+            lower_j = min(max(lower[j], lo_b), hi_b)
+            upper_j = min(max(upper[j], lo_b), hi_b)
+            if not upper_j > lower_j:
+                continue
+            y_lo, x_lo = math.sqrt(max(hi_b - lower_j, 0.0)), math.sqrt(max(lower_j - lo_b, 0.0))
+            y_up, x_up = math.sqrt(max(hi_b - upper_j, 0.0)), math.sqrt(max(upper_j - lo_b, 0.0))
+            cross = two_d * (upper_j - lower_j) / (y_lo * x_up + x_lo * y_up)
+            dot = x_lo * x_up + y_lo * y_up
+            # unit vectors: mid = atan2(y_lo, x_lo) + atan2(y_up, x_up), half = atan2(cross, dot)
+            half = math.atan2(cross, dot)
+            out[b, j, 0] = 2.0 * half
+            norm = math.sqrt((y_lo * y_lo + x_lo * x_lo) * (y_up * y_up + x_up * x_up))
+            rho = math.hypot(cross, dot)
+            if norm > 0.0 and math.isfinite(norm) and rho > 0.0 and math.isfinite(rho):
+                cm, sm = (x_lo * x_up - y_lo * y_up) / norm, (y_lo * x_up + x_lo * y_up) / norm
+                ch, sh = dot / rho, cross / rho
+            else:  # legs that under- or overflow (a contact of 1e-300 P): the angles themselves
+                mid = math.atan2(y_lo, x_lo) + math.atan2(y_up, x_up)
+                cm, sm, ch, sh = math.cos(mid), math.sin(mid), math.cos(half), math.sin(half)
+            c, sn = cm, sm  # cos, sin of m mid
+            ck, sk = ch, sh  # cos, sin of m half
+            for m in range(1, 6):
+                out[b, j, m] = (2.0 / m) * c * sk
+                c, sn = c * cm - sn * sm, sn * cm + c * sm
+                ck, sk = ck * ch - sk * sh, sk * ch + ck * sh
+    return out
+
+
+@numba.njit(cache=True)
+def _moments_kernel(D, value, curvature, c2, d, slope_moments, curvature_moments):  # pragma: no cover - compiled
+    """On each piece h'(x0 + d cos t) = sum_k a_k cos(k t), a = (value + c2 d^2 / 2, curvature d, c2 d^2 / 2),
+    and h'' = b_0 + b_1 cos t, b = (curvature, 2 c2 d): their products with ``D`` (the pieces' cos integrals,
+    (B, J, 6)) summed over the pieces, then mapped to the moments by the product-to-sum matrices; the
+    magnitude with every term taken positive. Shapes (B, 3), (B, 4), (B, 3)."""
+    B, J = value.shape
+    slope = np.zeros((B, slope_moments.shape[0]))
+    curv = np.zeros((B, curvature_moments.shape[0]))
+    magnitude = np.zeros((B, slope_moments.shape[0]))
+    A = np.empty(18)
+    C = np.empty(12)
+    M = np.empty(18)
+    a = np.empty(3)
+    c = np.empty(2)
+    for i in range(B):
+        A[:] = 0.0
+        C[:] = 0.0
+        M[:] = 0.0
+        for j in range(J):
+            if D[i, j, 0] == 0.0:  # a piece the contact does not meet (every integral is 0)
+                continue
+            half = 0.5 * c2[i, j] * d[i] * d[i]
+            a[0] = value[i, j] + half
+            a[1] = curvature[i, j] * d[i]
+            a[2] = half
+            c[0] = curvature[i, j]
+            c[1] = 2.0 * c2[i, j] * d[i]
+            for m in range(6):
+                Dm = D[i, j, m]
+                for k in range(3):
+                    A[k * 6 + m] += a[k] * Dm
+                    M[k * 6 + m] += abs(a[k]) * abs(Dm)
+                for k in range(2):
+                    C[k * 6 + m] += c[k] * Dm
+        for n in range(slope_moments.shape[0]):
+            for q in range(18):
+                slope[i, n] += slope_moments[n, q] * A[q]
+                magnitude[i, n] += slope_moments[n, q] * M[q]
+        for n in range(curvature_moments.shape[0]):
+            for q in range(12):
+                curv[i, n] += curvature_moments[n, q] * C[q]
+    return slope, curv, magnitude
