@@ -922,3 +922,37 @@ def test_bracketed_edges_on_the_dovetail():
     steps = (reference.regime.values == 2) & (t > 1.0) & np.isfinite(error) & (np.abs((t - 0.25) % 1.0) > 1e-9)
     assert steps.sum() > 150
     assert error[steps].max() < 0.5, error[steps].max()
+
+
+def test_the_sub_steps_start_from_the_pattern_moving_to_the_end(monkeypatch):
+    """A sub-step's active set starts from its start pattern moved part of the way to the whole step's
+    end pattern (_toward). The problem of each sub-step is strictly convex, so the start changes only
+    the iterations: on the split-stick punch history (256 nodes) every state is the same to 1e-12 of
+    its scale with and without the hint (the final patterns agree, so the last solves are the same
+    arithmetic), and the hint saves iterations (measured: 736 against 905 on it; 15 / 25 % on the random
+    histories, benchmarks/random_histories.py seed 0, Hertz / punch, 1024 nodes)."""
+    from halfslip.geometry import RoundedPunch
+
+    data = np.loadtxt(SPLIT_HISTORY, delimiter=",")
+    problem = NormalProblem(RoundedPunch(flat_half_width=2e-3, radius=10e-3), 4 * (1 - 0.3**2) / 115e9)
+    width = max(problem.solve(P, M).right - problem.solve(P, M).left for P, M in data[1:, [1, 3]])
+
+    def run():
+        solver = GeneralSolver(problem, 0.6, 256, width=width)
+        return solver, helpers.march(solver, data[1:, 1:])
+
+    hinted, with_hint = run()
+    monkeypatch.setattr(general_module, "_toward", lambda now, end, fraction: None)
+    plain, without = run()
+    assert hinted.counters["substeps"] > 0
+    assert hinted.counters["iterations"] < plain.counters["iterations"]
+    for (a, _), (b, _) in zip(with_hint, without):
+        ma, mb = a.memory, b.memory
+        if ma.normal is None:
+            assert mb.normal is None
+            continue
+        assert np.array_equal(ma.status, mb.status)
+        scale = float(np.max(np.abs(mb.q))) or 1.0
+        assert np.max(np.abs(ma.q - mb.q)) <= 1e-12 * scale
+        assert a.stick_left == pytest.approx(b.stick_left, rel=0, abs=1e-12 * width)
+        assert a.stick_right == pytest.approx(b.stick_right, rel=0, abs=1e-12 * width)

@@ -324,8 +324,11 @@ class GeneralSolver(TangentialSolver):
             # the shadow lattice (twice the cell) takes every other sub-step: its arrivals are resolved
             # in proportion to its cells, so that the estimate sees the arrivals' error as well
             shadow = k % 2 == 0 or k == pieces
+            # the active set starts from the sub-step's start pattern moved towards the whole step's end
+            # pattern (the stick-slip boundaries travel steadily through a step): one iteration less
+            hint = _toward(sub.memory, fine.memory, 1.0 / (pieces - k + 1))
             sub, rep, apart = self._single(sub, t0 + lam * (t1 - t0) if k < pieces else t1, at,
-                                           shadow_from.loads if shadow else None)
+                                           shadow_from.loads if shadow else None, hint)
             if shadow:
                 shadow_from = sub
                 spread = max(spread, apart)
@@ -379,7 +382,7 @@ class GeneralSolver(TangentialSolver):
         return pieces
 
     def _single(self, state: ContactState, t1: float, loads1: Loads,
-                shadow_from: Loads | None) -> tuple[ContactState, StepReport, float]:
+                shadow_from: Loads | None, hint=None) -> tuple[ContactState, StepReport, float]:
         """One step, not subdivided; the shadow lattice steps from ``shadow_from`` (None: it waits). Returns
         the state, the report and how far apart the two lattices' widest stick intervals are (/ W)."""
         loads0 = state.loads
@@ -391,10 +394,10 @@ class GeneralSolver(TangentialSolver):
             return new, StepReport(regime, False, False, ""), 0.0
         if not loads1.P > 0.0:
             return *self._separate(state, t1, loads1), 0.0
-        ctx, fine = self._fine(state, loads1)
+        ctx, fine = self._fine(state, loads1, hint)
         return self._finish(state, t1, loads1, ctx, fine, shadow_from)
 
-    def _fine(self, state: ContactState, loads1: Loads) -> tuple["_Context", "_Outcome"]:
+    def _fine(self, state: ContactState, loads1: Loads, hint=None) -> tuple["_Context", "_Outcome"]:
         """The normal solution at ``loads1`` and the step on the fine lattice (P1 > 0)."""
         loads0 = state.loads
         mem = state.memory
@@ -413,7 +416,7 @@ class GeneralSolver(TangentialSolver):
         path = self._path(mem.normal, N1, loads0, loads1)
         load = _Load(N1, h, self._kinks, graded=self._graded_kinks)
         ctx = _Context(N1, h, path, load, normal_changed)
-        return ctx, self._take(mem, h, loads0, loads1, N1, path, load)
+        return ctx, self._take(mem, h, loads0, loads1, N1, path, load, hint)
 
     def _path(self, N0: NormalSolution | None, N1: NormalSolution, loads0: Loads, loads1: Loads):
         """The edge path of a step whose contact grows beyond ``N0`` (None otherwise)."""
@@ -496,8 +499,10 @@ class GeneralSolver(TangentialSolver):
         return lat
 
     def _take(self, mem: GeneralMemory, h: float, loads0: Loads, loads1: Loads,
-              N1: NormalSolution, path: EdgePath | None, load: _Load) -> _Outcome:
-        """The step on the lattice of spacing ``h`` whose memory is ``mem``."""
+              N1: NormalSolution, path: EdgePath | None, load: _Load, hint=None) -> _Outcome:
+        """The step on the lattice of spacing ``h`` whose memory is ``mem``; ``hint`` = (first, status),
+        where known, the pattern the active set starts from (the memory's otherwise: the solution is
+        unique, the start sets only how many iterations it takes)."""
         A, f = self.A, self.f
         first, n = _cells(N1.left, N1.right, h)
         x = (first + 0.5 + np.arange(n)) * h
@@ -521,6 +526,12 @@ class GeneralSolver(TangentialSolver):
                 G[a:b] = mem.G[c:d]
                 cap0[a:b] = mem.capacity[c:d]
                 known[a:b] = True
+        start = status.copy()
+        if hint is not None:
+            f0, guess = hint
+            lo, hi = max(first, f0), min(first + n, f0 + guess.size)
+            if hi > lo:
+                start[lo - first:hi - first] = guess[lo - f0:hi - f0]
         if not np.all(known):
             glock[~known] = self._arrivals(mem, loads0, loads1, N1, path, x[~known])
         sigma_term = 0.25 * A * loads1.sigma * x
@@ -544,7 +555,7 @@ class GeneralSolver(TangentialSolver):
             # carry the history's rigid slide, which may dwarf what the step changes)
             r0 = 0.5 * (float(np.min(r)) + float(np.max(r)))
             q, delta_int, status, Tq, iterations, restarts = self._active_set(
-                lat, n, r - r0, qmax, loads1.Q / h, status, A * float(qmax.max()) * h, ROUNDING * float(np.max(np.abs(r))))
+                lat, n, r - r0, qmax, loads1.Q / h, start, A * float(qmax.max()) * h, ROUNDING * float(np.max(np.abs(r))))
             delta_int += r0
             message = ""
         self.counters["iterations"] += iterations
@@ -888,6 +899,30 @@ def _integrate(path: EdgePath, xs: np.ndarray, edge: float, side: int, A: float,
     out = np.empty(xs.size)
     out[order] = np.cumsum(seg)
     return out
+
+
+def _toward(now: GeneralMemory, end: GeneralMemory, fraction: float):
+    """(first, status): the pattern of ``now`` with ``fraction`` of the way to ``end``'s taken, on the
+    cells both hold (None when they share none). Each run of cells whose status differs lies between a
+    boundary of ``now`` and its place in ``end``; it flips from the side where ``now`` already has the
+    run's end status, the nearest cells first (no side: it is left as it is)."""
+    if now.normal is None or end.normal is None or now.spacing != end.spacing:
+        return None
+    lo, hi = max(now.first, end.first), min(now.first + now.q.size, end.first + end.q.size)
+    if hi <= lo:
+        return None
+    s = end.status.copy()  # cells that arrive: as at the end
+    s[lo - end.first:hi - end.first] = now.status[lo - now.first:hi - now.first]
+    e = end.status
+    for a, b in _runs(s != e):
+        count = int(round(fraction * (b - a)))
+        if count == 0:
+            continue
+        if a > 0 and s[a - 1] == e[a]:
+            s[a:a + count] = e[a:a + count]
+        elif b < s.size and s[b] == e[b - 1]:
+            s[b - count:b] = e[b - count:b]
+    return end.first, s
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
