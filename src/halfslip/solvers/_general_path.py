@@ -397,7 +397,7 @@ def _quadratic_roots(a: float, b: float, c: float) -> list[float]:
     return sorted([q / a, c / q] if q != 0.0 else [0.0])
 
 
-def arrival_strains(path: EdgePath, x: np.ndarray, side: int, compliance: float) -> np.ndarray:
+def arrival_strains(path: EdgePath, x: np.ndarray, side: int, compliance: float, change=None) -> np.ndarray:
     """Strain locked in by the stuck increments of the step.
 
     Parameters
@@ -407,6 +407,8 @@ def arrival_strains(path: EdgePath, x: np.ndarray, side: int, compliance: float)
         Points arriving at the ``side`` edge (-1 left, +1 right) during the step.
     compliance : float
         A.
+    change : (dQ, dsigma), optional
+        The load changes whose increments are integrated (default: the path's own).
 
     Returns
     -------
@@ -417,7 +419,7 @@ def arrival_strains(path: EdgePath, x: np.ndarray, side: int, compliance: float)
     if x.size == 0:
         return np.zeros(0)
     l0, l1 = path.loads0, path.loads1
-    dQ, dS = l1.Q - l0.Q, l1.sigma - l0.sigma
+    dQ, dS = (l1.Q - l0.Q, l1.sigma - l0.sigma) if change is None else change
     lam_x = path.arrival(x, side)
     span = lam_x - path.lam_lo
     back = span[:, None] * _U**2

@@ -74,6 +74,18 @@ DEFAULT_TRAVEL = 0.01
 DEFAULT_STICK_TRAVEL = 0.02
 #: Most sub-steps one step is divided into.
 MAX_SUBSTEPS = 64
+#: Cells a contact edge may advance in one sub-step while part of the contact slips (the arrivals' locked
+#: displacements: the shape of M1's increments, their size from the lattice, _take; measured in
+#: docs/general_solver.md).
+ARRIVAL_CELLS = 8
+#: Rounds of that fit (a fixed point on the size; the second round halved the Hertz error).
+ARRIVAL_ROUNDS = 2
+#: How many cells beyond a growing edge the increments are matched to the lattice's own.
+ARRIVAL_MATCH = 3
+#: (dQ, dsigma) of the M1 increments whose shape the arrivals take: a unit shear force (the inverse
+#: square root at a stuck edge; the actual (dQ, dsigma) is 0 when only P and M change, as when a moment
+#: moves the contact, and the shape would be lost).
+ARRIVAL_SHAPE = (1.0, 0.0)
 #: Active-set iterations before the projected-gradient restart.
 MAX_ACTIVE_SET = 100
 #: The active set changes a cell only for a violation above this, relative to f max p (Coulomb) and to the
@@ -378,7 +390,7 @@ class GeneralSolver(TangentialSolver):
         pieces = min(MAX_SUBSTEPS, pieces)
         if self.arrivals and fine.regime == Regime.PARTIAL_SLIP and N0 is not None:
             grew = max(N0.left - N1.left, N1.right - N0.right, 0.0) / ctx.h
-            pieces = max(pieces, math.ceil(grew))
+            pieces = max(pieces, math.ceil(grew / ARRIVAL_CELLS))
         return pieces
 
     def _single(self, state: ContactState, t1: float, loads1: Loads,
@@ -499,10 +511,13 @@ class GeneralSolver(TangentialSolver):
         return lat
 
     def _take(self, mem: GeneralMemory, h: float, loads0: Loads, loads1: Loads,
-              N1: NormalSolution, path: EdgePath | None, load: _Load, hint=None) -> _Outcome:
+              N1: NormalSolution, path: EdgePath | None, load: _Load, hint=None, scale=None,
+              rounds: int = ARRIVAL_ROUNDS) -> _Outcome:
         """The step on the lattice of spacing ``h`` whose memory is ``mem``; ``hint`` = (first, status),
         where known, the pattern the active set starts from (the memory's otherwise: the solution is
-        unique, the start sets only how many iterations it takes)."""
+        unique, the start sets only how many iterations it takes); ``scale`` {side: size} of the arrivals'
+        increments at the growing edges (:meth:`_arrivals`), and ``rounds`` how many more times the sizes
+        may be found again from the lattice."""
         A, f = self.A, self.f
         first, n = _cells(N1.left, N1.right, h)
         x = (first + 0.5 + np.arange(n)) * h
@@ -533,7 +548,7 @@ class GeneralSolver(TangentialSolver):
             if hi > lo:
                 start[lo - first:hi - first] = guess[lo - f0:hi - f0]
         if not np.all(known):
-            glock[~known] = self._arrivals(mem, loads0, loads1, N1, path, x[~known])
+            glock[~known] = self._arrivals(mem, loads0, loads1, N1, path, x[~known], scale)
         sigma_term = 0.25 * A * loads1.sigma * x
         r = glock - sigma_term  # stick: (T q)_i - delta = -r_i
         qmax = f * cap
@@ -574,6 +589,28 @@ class GeneralSolver(TangentialSolver):
         # the reported shift in the package's datum: delta_l = delta_int + (A/pi) Q ln(l / l_int)
         Qh = h * float(np.sum(q))
         shift = delta_int + (A / math.pi) * Qh * math.log(self.datum / lat.datum)
+        if (self.arrivals and rounds > 0 and old and not np.all(known) and not gross and np.any(stick)
+                and np.any(slip) and path is not None):
+            # M1's increments are those of a fully stuck contact; part of this one slips. Keep their shape
+            # (that of a unit shear force) and size them, edge by edge, so that they give the lattice's own
+            # displacement change ARRIVAL_MATCH cells beyond the new edge; take the step again with the
+            # arrivals so locked
+            found = {}
+            for side in (-1, 1):
+                arrived = ~known & ((x < N1.center) if side < 0 else (x >= N1.center))
+                if not np.any(arrived) or not np.any(stick[arrived]):
+                    continue  # nothing arrived there, or all of it slips: M1's own increments
+                xe = np.array([x[0] - ARRIVAL_MATCH * h if side < 0 else x[-1] + ARRIVAL_MATCH * h])
+                moved = float((shift - kernel(xe[:, None] - x[None, :], h, self.datum, A) @ q)[0]
+                              + 0.25 * A * loads1.sigma * xe[0])
+                before = float((mem.shift - kernel(xe[:, None] - mem.x[None, :], mem.spacing, self.datum, A)
+                                @ mem.q)[0] + 0.25 * A * loads0.sigma * xe[0])
+                edge = mem.normal.left if side < 0 else mem.normal.right
+                m1 = side * float(_integrate(path, xe, edge, side, A, None, ARRIVAL_SHAPE)[0])
+                if m1 != 0.0 and math.isfinite((moved - before) / m1):
+                    found[side] = (moved - before) / m1
+            if found:
+                return self._take(mem, h, loads0, loads1, N1, path, load, (first, status), found, rounds - 1)
         memory = GeneralMemory(N1, h, first, _frozen(status), _frozen(q), _frozen(g), _frozen(G), _frozen(cap),
                                shift)
         slipping = _slipping_edges(N1, loads0, loads1, f) if mem.normal is not None else (False, False)
@@ -651,8 +688,10 @@ class GeneralSolver(TangentialSolver):
 
     # -- arrivals ---------------------------------------------------------------
     def _arrivals(self, mem: GeneralMemory, loads0: Loads, loads1: Loads, N1: NormalSolution,
-                  path: EdgePath | None, xs: np.ndarray) -> np.ndarray:
-        """Locked displacement of cells whose centres ``xs`` enter the contact during the step."""
+                  path: EdgePath | None, xs: np.ndarray, scale: dict | None = None) -> np.ndarray:
+        """Locked displacement of cells whose centres ``xs`` enter the contact during the step; with
+        ``scale`` {side: size}, the increments at that edge are ARRIVAL_SHAPE's times the size (see
+        :meth:`_take`)."""
         A = self.A
         if path is None:
             path = EdgePath(self.problem, mem.normal, N1, loads0, loads1)
@@ -665,7 +704,11 @@ class GeneralSolver(TangentialSolver):
             for side, edge in ((-1, mem.normal.left), (1, mem.normal.right)):
                 mask = (xs < mem.normal.center) if side < 0 else (xs >= mem.normal.center)
                 if np.any(mask):
-                    out[mask] = g0[mask] + side * _integrate(path, xs[mask], edge, side, A, None)
+                    if scale is not None and side in scale:
+                        out[mask] = g0[mask] + scale[side] * side * _integrate(path, xs[mask], edge, side, A, None,
+                                                                               ARRIVAL_SHAPE)
+                    else:
+                        out[mask] = g0[mask] + side * _integrate(path, xs[mask], edge, side, A, None)
             return out
         lam0 = path.lam_lo
         left, right = path.edges(np.array(lam0))
@@ -876,7 +919,8 @@ class _Load:
         return cap
 
 
-def _integrate(path: EdgePath, xs: np.ndarray, edge: float, side: int, A: float, formation) -> np.ndarray:
+def _integrate(path: EdgePath, xs: np.ndarray, edge: float, side: int, A: float, formation,
+               change=None) -> np.ndarray:
     """int between ``edge`` and each of ``xs`` (outward on ``side``) of the arrival strain.
 
     Without ``formation``: the stuck increments only (their strain at the
@@ -891,7 +935,7 @@ def _integrate(path: EdgePath, xs: np.ndarray, edge: float, side: int, A: float,
     a, b = ends[:-1], ends[1:]
     pts = a[:, None] + (b - a)[:, None] * _GL_T[None, :]
     flat = pts.ravel()
-    inc = arrival_strains(path, flat, side, A)
+    inc = arrival_strains(path, flat, side, A, change)
     if formation is not None:
         l0, l1 = formation
         inc = inc + 0.25 * A * (l0.sigma + path.lam_lo * (l1.sigma - l0.sigma))
