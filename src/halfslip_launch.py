@@ -1,6 +1,6 @@
 """Entry point of the ``halfslip`` command: the CLI, with start-up interrupts handled.
 
-Importing halfslip (numpy, scipy, xarray, numba) takes about a second. An
+Importing halfslip (numpy, scipy, xarray) takes about a second. An
 interrupt in that second would end in a KeyboardInterrupt traceback from the
 import, before :func:`halfslip.cli.main` could handle it; this module imports
 nothing heavy itself, so it can: one line, exit status 130.

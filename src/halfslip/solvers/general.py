@@ -601,10 +601,8 @@ class GeneralSolver(TangentialSolver):
                 if not np.any(arrived) or not np.any(stick[arrived]):
                     continue  # nothing arrived there, or all of it slips: M1's own increments
                 xe = np.array([x[0] - ARRIVAL_MATCH * h if side < 0 else x[-1] + ARRIVAL_MATCH * h])
-                moved = float((shift - kernel(xe[:, None] - x[None, :], h, self.datum, A) @ q)[0]
-                              + 0.25 * A * loads1.sigma * xe[0])
-                before = float((mem.shift - kernel(xe[:, None] - mem.x[None, :], mem.spacing, self.datum, A)
-                                @ mem.q)[0] + 0.25 * A * loads0.sigma * xe[0])
+                moved = float(self._displacement(shift, x, q, h, loads1.sigma, xe)[0])
+                before = float(self._displacement(mem.shift, mem.x, mem.q, mem.spacing, loads0.sigma, xe)[0])
                 edge = mem.normal.left if side < 0 else mem.normal.right
                 m1 = side * float(_integrate(path, xe, edge, side, A, None, ARRIVAL_SHAPE)[0])
                 if m1 != 0.0 and math.isfinite((moved - before) / m1):
@@ -697,18 +695,13 @@ class GeneralSolver(TangentialSolver):
             path = EdgePath(self.problem, mem.normal, N1, loads0, loads1)
         out = np.empty(xs.size)
         if mem.normal is not None:
-            # the displacement at the start of the step, from the old shear (package datum)
-            xo = mem.x
-            g0 = (mem.shift - kernel(xs[:, None] - xo[None, :], mem.spacing, self.datum, A) @ mem.q
-                  + 0.25 * A * loads0.sigma * xs)
+            # the displacement at the start of the step, from the old shear
+            g0 = self._displacement(mem.shift, mem.x, mem.q, mem.spacing, loads0.sigma, xs)
             for side, edge in ((-1, mem.normal.left), (1, mem.normal.right)):
                 mask = (xs < mem.normal.center) if side < 0 else (xs >= mem.normal.center)
                 if np.any(mask):
-                    if scale is not None and side in scale:
-                        out[mask] = g0[mask] + scale[side] * side * _integrate(path, xs[mask], edge, side, A, None,
-                                                                               ARRIVAL_SHAPE)
-                    else:
-                        out[mask] = g0[mask] + side * _integrate(path, xs[mask], edge, side, A, None)
+                    size, shape = (scale[side], ARRIVAL_SHAPE) if scale and side in scale else (1.0, None)
+                    out[mask] = g0[mask] + size * side * _integrate(path, xs[mask], edge, side, A, None, shape)
             return out
         lam0 = path.lam_lo
         left, right = path.edges(np.array(lam0))
@@ -720,6 +713,11 @@ class GeneralSolver(TangentialSolver):
             if np.any(mask):
                 out[mask] = gf + side * _integrate(path, xs[mask], xf, side, A, (loads0, loads1))
         return out
+
+    def _displacement(self, shift, xc, q, spacing, sigma, xs) -> np.ndarray:
+        """Relative tangential displacement at ``xs`` of the shear ``q`` on the cells centred at ``xc``
+        (package datum, ``shift`` the rigid shift) under the bulk tension ``sigma``: T1."""
+        return shift - kernel(xs[:, None] - xc[None, :], spacing, self.datum, self.A) @ q + 0.25 * self.A * sigma * xs
 
     def _separate(self, state, t1, loads1):
         """All memory lost; the shift keeps g at the old contact centre."""
@@ -946,10 +944,11 @@ def _integrate(path: EdgePath, xs: np.ndarray, edge: float, side: int, A: float,
 
 
 def _toward(now: GeneralMemory, end: GeneralMemory, fraction: float):
-    """(first, status): the pattern of ``now`` with ``fraction`` of the way to ``end``'s taken, on the
-    cells both hold (None when they share none). Each run of cells whose status differs lies between a
-    boundary of ``now`` and its place in ``end``; it flips from the side where ``now`` already has the
-    run's end status, the nearest cells first (no side: it is left as it is)."""
+    """(first, status) over ``end``'s cells: on the cells ``now`` holds too, its pattern with
+    ``fraction`` of the way to ``end``'s taken; on the cells that arrive, ``end``'s (None when the two
+    share no cell). Each run of cells whose status differs lies between a boundary of ``now`` and its
+    place in ``end``; it flips from the side where ``now`` already has the run's end status, the
+    nearest cells first (no side: it is left as it is)."""
     if now.normal is None or end.normal is None or now.spacing != end.spacing:
         return None
     lo, hi = max(now.first, end.first), min(now.first + now.q.size, end.first + end.q.size)
