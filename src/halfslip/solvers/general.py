@@ -78,7 +78,8 @@ MAX_SUBSTEPS = 64
 #: displacements: the shape of M1's increments, their size from the lattice, _take; measured in
 #: docs/general_solver.md).
 ARRIVAL_CELLS = 8
-#: Rounds of that fit (a fixed point on the size; the second round halved the Hertz error).
+#: How many times a step is taken again when the fitted sizes change its stick-slip pattern (for a fixed
+#: pattern the fit is exact, _fit_arrivals; on the random histories a tenth of the fits change it).
 ARRIVAL_ROUNDS = 2
 #: How many cells beyond a growing edge the increments are matched to the lattice's own.
 ARRIVAL_MATCH = 3
@@ -547,8 +548,9 @@ class GeneralSolver(TangentialSolver):
             lo, hi = max(first, f0), min(first + n, f0 + guess.size)
             if hi > lo:
                 start[lo - first:hi - first] = guess[lo - f0:hi - f0]
+        g0 = None
         if not np.all(known):
-            glock[~known] = self._arrivals(mem, loads0, loads1, N1, path, x[~known], scale)
+            glock[~known], g0 = self._arrivals(mem, loads0, loads1, N1, path, x[~known], scale)
         sigma_term = 0.25 * A * loads1.sigma * x
         r = glock - sigma_term  # stick: (T q)_i - delta = -r_i
         qmax = f * cap
@@ -569,10 +571,25 @@ class GeneralSolver(TangentialSolver):
             # a constant in r only shifts delta: take the common offset out (the locked displacements
             # carry the history's rigid slide, which may dwarf what the step changes)
             r0 = 0.5 * (float(np.min(r)) + float(np.max(r)))
+            gscale = A * float(qmax.max()) * h
+            floor = ROUNDING * float(np.max(np.abs(r)))
             q, delta_int, status, Tq, iterations, restarts = self._active_set(
-                lat, n, r - r0, qmax, loads1.Q / h, start, A * float(qmax.max()) * h, ROUNDING * float(np.max(np.abs(r))))
+                lat, n, r - r0, qmax, loads1.Q / h, start, gscale, floor)
             delta_int += r0
             message = ""
+            if (self.arrivals and rounds > 0 and old and g0 is not None and path is not None
+                    and np.any(status == 0) and np.any(status != 0)):
+                # M1's increments are those of a fully stuck contact; part of this one slips. Keep their
+                # shape (that of a unit shear force) and size them, edge by edge, so that they give the
+                # lattice's own displacement change ARRIVAL_MATCH cells beyond the new edge
+                fit = self._fit_arrivals(mem, lat, h, loads0, loads1, path, x, known, g0, glock, status, q,
+                                         delta_int, sigma_term, qmax, gscale, floor)
+                if fit is not None and fit[0] is None:
+                    # the sizes change the pattern: take the step again with the arrivals so locked
+                    return self._take(mem, h, loads0, loads1, N1, path, load, (first, status), fit[1],
+                                      rounds - 1)
+                if fit is not None:
+                    q, delta_int, Tq, glock = fit
         self.counters["iterations"] += iterations
         self.counters["restarts"] += restarts
         g = delta_int - Tq + sigma_term
@@ -589,26 +606,6 @@ class GeneralSolver(TangentialSolver):
         # the reported shift in the package's datum: delta_l = delta_int + (A/pi) Q ln(l / l_int)
         Qh = h * float(np.sum(q))
         shift = delta_int + (A / math.pi) * Qh * math.log(self.datum / lat.datum)
-        if (self.arrivals and rounds > 0 and old and not np.all(known) and not gross and np.any(stick)
-                and np.any(slip) and path is not None):
-            # M1's increments are those of a fully stuck contact; part of this one slips. Keep their shape
-            # (that of a unit shear force) and size them, edge by edge, so that they give the lattice's own
-            # displacement change ARRIVAL_MATCH cells beyond the new edge; take the step again with the
-            # arrivals so locked
-            found = {}
-            for side in (-1, 1):
-                arrived = ~known & ((x < N1.center) if side < 0 else (x >= N1.center))
-                if not np.any(arrived) or not np.any(stick[arrived]):
-                    continue  # nothing arrived there, or all of it slips: M1's own increments
-                xe = np.array([x[0] - ARRIVAL_MATCH * h if side < 0 else x[-1] + ARRIVAL_MATCH * h])
-                moved = float(self._displacement(shift, x, q, h, loads1.sigma, xe)[0])
-                before = float(self._displacement(mem.shift, mem.x, mem.q, mem.spacing, loads0.sigma, xe)[0])
-                edge = mem.normal.left if side < 0 else mem.normal.right
-                m1 = side * float(_integrate(path, xe, edge, side, A, None, ARRIVAL_SHAPE)[0])
-                if m1 != 0.0 and math.isfinite((moved - before) / m1):
-                    found[side] = (moved - before) / m1
-            if found:
-                return self._take(mem, h, loads0, loads1, N1, path, load, (first, status), found, rounds - 1)
         memory = GeneralMemory(N1, h, first, _frozen(status), _frozen(q), _frozen(g), _frozen(G), _frozen(cap),
                                shift)
         slipping = _slipping_edges(N1, loads0, loads1, f) if mem.normal is not None else (False, False)
@@ -686,10 +683,10 @@ class GeneralSolver(TangentialSolver):
 
     # -- arrivals ---------------------------------------------------------------
     def _arrivals(self, mem: GeneralMemory, loads0: Loads, loads1: Loads, N1: NormalSolution,
-                  path: EdgePath | None, xs: np.ndarray, scale: dict | None = None) -> np.ndarray:
-        """Locked displacement of cells whose centres ``xs`` enter the contact during the step; with
-        ``scale`` {side: size}, the increments at that edge are ARRIVAL_SHAPE's times the size (see
-        :meth:`_take`)."""
+                  path: EdgePath | None, xs: np.ndarray, scale: dict | None = None):
+        """Locked displacement of cells whose centres ``xs`` enter the contact during the step, and the
+        displacement they had at its start (None for a contact that forms in the step); with ``scale``
+        {side: size}, the increments at that edge are ARRIVAL_SHAPE's times the size (see :meth:`_take`)."""
         A = self.A
         if path is None:
             path = EdgePath(self.problem, mem.normal, N1, loads0, loads1)
@@ -702,7 +699,7 @@ class GeneralSolver(TangentialSolver):
                 if np.any(mask):
                     size, shape = (scale[side], ARRIVAL_SHAPE) if scale and side in scale else (1.0, None)
                     out[mask] = g0[mask] + size * side * _integrate(path, xs[mask], edge, side, A, None, shape)
-            return out
+            return out, g0
         lam0 = path.lam_lo
         left, right = path.edges(np.array(lam0))
         xf = 0.5 * (float(left) + float(right))
@@ -712,7 +709,85 @@ class GeneralSolver(TangentialSolver):
             mask = (xs < xf) if side < 0 else (xs >= xf)
             if np.any(mask):
                 out[mask] = gf + side * _integrate(path, xs[mask], xf, side, A, (loads0, loads1))
-        return out
+        return out, None
+
+    def _fit_arrivals(self, mem, lat, h, loads0, loads1, path, x, known, g0, glock, status, q, delta, sigma_term,
+                      qmax, gscale, floor):
+        """Size the arrivals' increments to the lattice (:meth:`_take`), for the pattern ``status``.
+
+        At each growing edge where some arrived cell sticks, the locked
+        increments become size x ARRIVAL_SHAPE's, the size such that the
+        lattice's displacement ARRIVAL_MATCH cells beyond the new edge changes
+        over the step by size x the shape's change there. For a fixed pattern
+        the solution is affine in the sizes (one solve on the stick set with a
+        column per side for the shape and one for the increments now locked),
+        so the sizes come from a linear system of one or two equations.
+
+        Returns (q, delta, T q, locks) at those sizes when the pattern still
+        holds; (None, {side: size}) when it does not (the caller takes the step
+        again from the pattern); None when no edge is fitted.
+        """
+        A = self.A
+        n = x.size
+        N0 = mem.normal
+        stick = status == 0
+        sides, shapes, now, match, m1 = [], [], [], [], []
+        for side in (-1, 1):
+            arrived = ~known & ((x < N0.center) if side < 0 else (x >= N0.center))
+            if not np.any(arrived) or not np.any(stick[arrived]):
+                continue  # nothing arrived there, or all of it slips: M1's own increments
+            edge = N0.left if side < 0 else N0.right
+            xe = np.array([x[0] - ARRIVAL_MATCH * h if side < 0 else x[-1] + ARRIVAL_MATCH * h])
+            unit = side * float(_integrate(path, xe, edge, side, A, None, ARRIVAL_SHAPE)[0])
+            if not (unit != 0.0 and math.isfinite(unit)):
+                continue
+            phi = np.zeros(n)
+            phi[arrived] = side * _integrate(path, x[arrived], edge, side, A, None, ARRIVAL_SHAPE)
+            cur = np.zeros(n)
+            cur[arrived] = glock[arrived] - g0[arrived[~known]]
+            sides.append(side)
+            shapes.append(phi)
+            now.append(cur)
+            match.append(xe)
+            m1.append(unit)
+        if not sides:
+            return None
+        k = len(sides)
+        cols = np.stack([np.ones(n)] + shapes + now, axis=1)[stick]
+        Y, cg = lat.solve_runs(_runs(stick), n, cols)
+        self.counters["cg_iterations"] += cg
+        y0 = Y[:, 0]
+        # the response of (q on the stick cells, delta) to a unit change of the locks along each column
+        ddelta = Y[:, 1:].sum(axis=0) / y0.sum()
+        dq = ddelta[None, :] * y0[:, None] - Y[:, 1:]
+        xe = np.concatenate(match)
+        K = kernel(xe[:, None] - x[None, stick], h, self.datum, A)
+        dmoved = ddelta[None, :] - K @ dq  # (sides, 2k): the matched displacements' response
+        shift = delta + (A / math.pi) * h * float(np.sum(q)) * math.log(self.datum / lat.datum)
+        moved = self._displacement(shift, x, q, h, loads1.sigma, xe)
+        before = self._displacement(mem.shift, mem.x, mem.q, mem.spacing, loads0.sigma, xe)
+        # sides j: moved_j + sum_k size_k dmoved_jk(shape_k) - sum_k dmoved_jk(now_k) = before_j + size_j m1_j
+        M = dmoved[:, :k] - np.diag(m1)
+        rhs = before - moved + dmoved[:, k:].sum(axis=1)
+        try:
+            size = np.linalg.solve(M, rhs)
+        except np.linalg.LinAlgError:
+            return None
+        if not np.all(np.isfinite(size)):
+            return None
+        weights = np.concatenate((size, -np.ones(k)))
+        q = q.copy()
+        q[stick] += dq @ weights
+        delta = delta + float(ddelta @ weights)
+        glock = glock + np.stack(shapes, axis=1) @ size - np.stack(now, axis=1).sum(axis=1)
+        Tq = lat.matvec(q)
+        s = delta - Tq + sigma_term - glock
+        over = stick & (np.abs(q) > qmax + FLIP_TOL * float(qmax.max()))
+        back = ~stick & (status * s < -max(FLIP_TOL * gscale, floor))
+        found = dict(zip(sides, size.tolist()))
+        if np.any(over) or np.any(back):
+            return None, found
+        return q, delta, Tq, glock
 
     def _displacement(self, shift, xc, q, spacing, sigma, xs) -> np.ndarray:
         """Relative tangential displacement at ``xs`` of the shear ``q`` on the cells centred at ``xc``
