@@ -847,10 +847,11 @@ ESTIMATE_FACTOR = 3.0
 AFTER_SLIP_SPLIT_BUG = (
     "BUG (open, issue 14): Hertz, after a Cattaneo slip (P0, 0.7 f P0), the segment to (1.3 P0, "
     "0.2 f P0, 0.1 a P0, 2e7 Pa) taken as one step or split: the end states differ by more than the "
-    "tolerance: the outermost stick points by 2.3e-2 of the width (128 nodes, 10 equal steps; 1.1e-2 at "
-    "512 nodes, 100 steps; 6.6e-3 for the graded splits; 1.6e-10 after a first step of 1e-9). Islands of "
-    "1-4 stuck cells at the advancing edge come and go with the split (q agrees to 1.5e-3 in L2): the "
-    "time discretisation of a slipping step whose contact moves (docs/general_solver.md, limits)")
+    "tolerance: the outermost stick points by 4.1e-2 of the width (128 nodes, 10 equal steps, a first "
+    "step of 1e-9 or 2e-9, or the graded splits; 3.4e-3 at 512 nodes, 100 steps; 0.3.3: 2.3e-2, "
+    "1.6e-10, 6.6e-3 and 1.1e-2). Islands of one cell at the advancing edge come and go with the "
+    "split, and the main stick zone's edge moves by about a cell: the time discretisation of a "
+    "slipping step whose contact moves (docs/general_solver.md, limits)")
 
 
 def after_slip_split(kind, nodes, fractions):
@@ -894,8 +895,11 @@ def test_step_splitting_after_slip(kind, nodes, steps):
     look right: the steps' error estimates (StepReport.error_estimate) say so, and the
     difference stays within ESTIMATE_FACTOR of the larger of them (single step at 128 nodes:
     estimate 3.7e-2 against the difference 3.7e-2). With one cell of arrival per sub-step
-    (the default since) the difference is 2.3e-2 at 128 nodes (estimate 1.9e-2) and 1.1e-2 at
-    512 (estimate 3.6e-2).
+    (0.3.1 - 0.3.3) the difference was 2.3e-2 at 128 nodes (estimate 1.9e-2) and 1.1e-2 at
+    512 (estimate 3.6e-2); with the arrival model of 0.3.4 - 0.3.5 it is 4.1e-2 at 128 nodes
+    (estimate 3.1e-2: the single step's end has one stick zone, to 0.946 of the width, the split
+    one islands out to 0.987; 2048 nodes put the edge at 0.957 either way) and 3.4e-3 at 512
+    (estimate 3.7e-2).
     """
     difference, said = after_slip_split(kind, nodes, list(np.arange(1, steps + 1) / steps))
     if kind == "punch":
@@ -921,10 +925,14 @@ def test_tiny_steps_after_slip(kind, split):
     step (TINY_AFTER_SLIP_TOL).
 
     Hertz does not meet it, as test_step_splitting_after_slip (open defect, recorded outcome):
-    outermost stick points 1.6e-10 / 3.1e-10 (tiny_first, tiny_2e-9: within the tolerance
-    since the arrivals are sub-stepped one cell at a time; 2.8e-6 before) and 6.6e-3 (graded)
-    of the width apart at 128 nodes; the steps' error estimates say more than that (1.5e-2,
-    5.3e-2), and the difference must stay within ESTIMATE_FACTOR of them.
+    outermost stick points 4.1e-2 of the width apart at 128 nodes for every split (0.3.4 -
+    0.3.5; 0.3.3, one cell of arrival per sub-step: 1.6e-10 / 3.1e-10 for tiny_first and
+    tiny_2e-9, 6.6e-3 graded). The single step from the slipped state is cut into more
+    sub-steps than the rest of the split one: its stick edge is taken to travel from the old
+    stick edge (15 sub-steps), while a first tiny step reverses the slip, sticks the whole
+    contact, and the rest travels from the contact edge (10); the split ends with one-cell
+    islands at the advancing edge. The steps' error estimates say 3.1e-2, and the difference
+    must stay within ESTIMATE_FACTOR of them.
     """
     difference, said = after_slip_split(kind, 128, SPLITS[split])
     if kind == "punch":
