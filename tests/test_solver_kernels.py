@@ -211,7 +211,7 @@ from scipy.linalg import toeplitz  # noqa: E402
 from halfslip.solvers import _toeplitz as tz  # noqa: E402
 from halfslip.solvers._toeplitz import ToeplitzLattice  # noqa: E402
 
-SIZE = 300
+SIZE = 500
 H = 1e-6
 
 
@@ -282,11 +282,26 @@ def _stick_solve(lat: ToeplitzLattice, runs, n: int, rhs: np.ndarray) -> np.ndar
 
 RUNS = {
     "one": [(10, 90)],
-    "schur": [(0, 40), (50, 120), (130, 131), (140, 200)],          # gaps of 28 cells: Schur complement
-    "islands": [(0, 5), (100, 229), (290, 291)],                     # 6 cells beside the longest run: Schur
-    "cg": [(0, 30), (100, 229), (260, 290)],                         # gaps of 102, 60 others: CG, short runs dense
-    "cg-long": [(0, 140), (200, 300)],                               # CG with FFT solves on both runs
+    "gaps": [(0, 40), (50, 120), (130, 131), (140, 200)],            # gaps of 28 cells: Schur complement
+    "gaps-dense": [(0, 20), (30, 60), (70, 100)],                     # span within DENSE_CELLS: its inverse
+    "gaps-wide": [(0, 30), (100, 229), (260, 290)],                   # gaps of 101, 60 other cells: Schur
+    "gaps-long": [(0, 140), (200, 300)],                              # one gap of 60 between long runs
+    "islands": [(0, 5), (100, 229), (290, 291)],                      # 6 cells beside the longest run: Schur
+    "cg": [(0, 30), (200, 229), (400, 430)],                          # gaps of 341 > GAP_CELLS: CG, runs dense
+    "cg-long": [(0, 140), (310, 480)],                                # CG with FFT solves on both runs
 }
+
+
+def test_the_inverse_columns_are_the_dense_inverse(lattice):
+    """The columns of T_m^-1 at the gaps (a solve for each gap's first, the Gohberg-Semencul recursion for
+    the rest) against the dense inverse, for gaps deep inside a span beyond DENSE_CELLS."""
+    runs = [(0, 100), (260, 300), (420, 500)]
+    m = 500
+    got = lattice._inverse_columns(m, runs, 0)
+    cells = np.r_[100:260, 300:420]
+    ref = np.linalg.inv(_dense(lattice, m))[:, cells]
+    assert got.shape == ref.shape
+    assert _rel(got, ref) <= 1e-11
 
 
 @pytest.mark.parametrize("case", sorted(RUNS))
