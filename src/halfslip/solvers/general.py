@@ -469,7 +469,9 @@ class GeneralSolver(TangentialSolver):
             if cmem is None or not math.isfinite(cmem.spacing):
                 cmem = _empty(2.0 * h, None, state.shift)
             path = ctx.path if shadow_from == loads0 else self._path(cmem.normal, N1, shadow_from, loads1)
-            rough = self._take(cmem, cmem.spacing, shadow_from, loads1, N1, path, ctx.load)
+            # its active set starts from the fine lattice's answer, coarsened (its own memory is a sub-step older)
+            rough = self._take(cmem, cmem.spacing, shadow_from, loads1, N1, path, ctx.load,
+                               _coarsened(fine.memory))
             coarse = rough.memory
             error = max(_apart(a, b) for a, b in zip(fine.stick, rough.stick)) / W
             if fine.regime == Regime.PARTIAL_SLIP:
@@ -1041,6 +1043,16 @@ def _toward(now: GeneralMemory, end: GeneralMemory, fraction: float):
         elif b < s.size and s[b] == e[b - 1]:
             s[b - count:b] = e[b - count:b]
     return end.first, s
+
+
+def _coarsened(fine: GeneralMemory):
+    """(first, status) of ``fine``'s pattern on the lattice of twice its cell (the shadow's): coarse cell c
+    covers fine cells 2c and 2c + 1 and takes the status of the one of them in ``fine``'s range, the
+    second where both are."""
+    first = fine.first // 2
+    count = (fine.first + fine.q.size + 1) // 2 - first
+    idx = np.clip(2 * (first + np.arange(count)) + 1 - fine.first, 0, fine.q.size - 1)
+    return first, fine.status[idx].copy()
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
