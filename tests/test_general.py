@@ -997,3 +997,26 @@ def test_the_shadow_starts_from_the_fine_pattern_coarsened(monkeypatch):
         scale = float(np.max(np.abs(cb.q))) or 1.0
         assert np.max(np.abs(ca.q - cb.q)) <= 1e-12 * scale
         assert ra.error_estimate == pytest.approx(rb.error_estimate, rel=1e-9, abs=1e-12)
+
+
+#: A receding contact under slip against the exact method, at 256 nodes and the default sub-steps:
+#: the history's dissipation, relative. Measured -0.015 % (Hertz) and -0.04 % (punch); before 0.3.5, which
+#: lost the dissipation of the cells that leave the contact while slipping, -0.56 % and -3.3 %.
+RECEDING_DISSIPATION_TOL = 3e-3
+
+
+@pytest.mark.parametrize("kind", ["hertz", "punch"])
+def test_a_receding_contact_keeps_the_dissipation_of_the_cells_that_leave(kind):
+    """Cattaneo slip at P0, then P falling to 0.6 P0 at constant Q (the slip zones grow while the edges
+    recede: cells leave the contact slipping), reversal, reloading and a second recession with slip:
+    the dissipation after every step against the exact method (RECEDING_DISSIPATION_TOL of the total).
+    The cells that leave slip until the receding edge passes them (GeneralSolver._leaving); the end
+    state does not hold them."""
+    problem = NormalProblem(PROFILES[kind], A)
+    path = [(P0, 0.0), (P0, 0.5 * F * P0), (0.6 * P0, 0.5 * F * P0), (0.6 * P0, -0.3 * F * P0),
+            (P0, -0.3 * F * P0), (0.7 * P0, 0.4 * F * P0)]
+    exact = march(ExactMemory(problem, F, P0), path)
+    general = march(GeneralSolver(problem, F, 256), path)
+    total = exact[-1][0].dissipation
+    for (g, _), (e, _) in zip(general, exact):
+        assert abs(g.dissipation - e.dissipation) <= RECEDING_DISSIPATION_TOL * total

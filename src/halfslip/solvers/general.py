@@ -87,6 +87,11 @@ ARRIVAL_MATCH = 3
 #: square root at a stuck edge; the actual (dQ, dsigma) is 0 when only P and M change, as when a moment
 #: moves the contact, and the shape would be lost).
 ARRIVAL_SHAPE = (1.0, 0.0)
+#: A cell that leaves the contact while slipping carries, on average over its time in contact, this
+#: fraction of its pressure at the step's start: near a contact edge p grows like the square root of the
+#: distance to it, and the edge passes the cell at a steady rate over a (sub-)step, so p / p_0 = sqrt(1 - u)
+#: over the fraction u of that time, whose mean is 2/3 (:meth:`GeneralSolver._leaving`).
+LEAVING_PRESSURE = 2.0 / 3.0
 #: Active-set iterations before the projected-gradient restart.
 MAX_ACTIVE_SET = 100
 #: The active set changes a cell only for a violation above this, relative to f max p (Coulomb) and to the
@@ -604,6 +609,10 @@ class GeneralSolver(TangentialSolver):
         g = np.where(stick, glock, g)
         s = np.where(stick, 0.0, s)
         dissipation = float(np.sum(f * 0.5 * (cap0 + cap)[slip] * np.abs(s[slip]))) * h
+        if old:
+            # cells that leave the contact during the step while slipping dissipate until they leave
+            dissipation += self._leaving(mem, N1, first, n, delta_int + (A / math.pi) * h * float(np.sum(q))
+                                         * math.log(self.datum / lat.datum), x, q, h, loads1.sigma)
         G = G + s
         # the reported shift in the package's datum: delta_l = delta_int + (A/pi) Q ln(l / l_int)
         Qh = h * float(np.sum(q))
@@ -790,6 +799,35 @@ class GeneralSolver(TangentialSolver):
         if np.any(over) or np.any(back):
             return None, found
         return q, delta, Tq, glock
+
+    def _leaving(self, mem, N1, first, n, shift, x, q, h, sigma1) -> float:
+        """Dissipation of the cells that leave the contact during the step while slipping: the end state does
+        not hold them, and until 0.3.5 their slip until they left was lost (tests/test_general.py,
+        test_a_receding_contact_keeps_the_dissipation_of_the_cells_that_leave: against the exact method,
+        0.56 % / 3.3 % of the history's dissipation missing at 256 nodes, Hertz / punch, with the default
+        sub-steps, and 9.4 % / 10.5 % of it in the receding step taken whole; now 0.02 % / 0.04 %).
+
+        Each slipped lam (g1 - g_start) until its centre left (lam the fraction of the step at which the
+        receding edge passed it, linear in the edge's travel; g1 the displacement at its centre at the end,
+        from the end's shear; its slip rate taken as steady), under LEAVING_PRESSURE times its capacity at
+        the start; none where that slip would oppose its shear.
+        """
+        lo, hi = mem.first, mem.first + mem.q.size
+        j = np.arange(lo, hi)
+        out = ((j < first) | (j >= first + n)) & (mem.status != 0)
+        if not np.any(out):
+            return 0.0
+        xs = mem.x[out]
+        N0 = mem.normal
+        lam = np.where(xs < N0.center,
+                       (xs - N0.left) / (N1.left - N0.left) if N1.left != N0.left else 1.0,
+                       (xs - N0.right) / (N1.right - N0.right) if N1.right != N0.right else 1.0)
+        lam = np.clip(lam, 0.0, 1.0)
+        g1 = self._displacement(shift, x, q, h, sigma1, xs)
+        slip = lam * (g1 - mem.g[out])
+        st = mem.status[out]
+        slip = np.where(st * slip > 0.0, slip, 0.0)
+        return float(np.sum(self.f * LEAVING_PRESSURE * mem.capacity[out] * np.abs(slip))) * mem.spacing
 
     def _displacement(self, shift, xc, q, spacing, sigma, xs) -> np.ndarray:
         """Relative tangential displacement at ``xs`` of the shear ``q`` on the cells centred at ``xc``
