@@ -924,13 +924,9 @@ def test_bracketed_edges_on_the_dovetail():
     assert error[steps].max() < 0.5, error[steps].max()
 
 
-def test_the_sub_steps_start_from_the_pattern_moving_to_the_end(monkeypatch):
-    """A sub-step's active set starts from its start pattern moved part of the way to the whole step's
-    end pattern (_toward). The problem of each sub-step is strictly convex, so the start changes only
-    the iterations: on the split-stick punch history (256 nodes) every state is the same to 1e-12 of
-    its scale with and without the hint (the final patterns agree, so the last solves are the same
-    arithmetic), and the hint saves iterations (measured: 736 against 905 on it; 15 / 25 % on the random
-    histories, benchmarks/random_histories.py seed 0, Hertz / punch, 1024 nodes)."""
+def _split_history_with_and_without(monkeypatch, name, replacement):
+    """The split-stick punch history (256 nodes) marched as it is and with general.<name> replaced by
+    ``replacement``: ((solver, [(state, report)]) for each, the reference width)."""
     from halfslip.geometry import RoundedPunch
 
     data = np.loadtxt(SPLIT_HISTORY, delimiter=",")
@@ -941,9 +937,20 @@ def test_the_sub_steps_start_from_the_pattern_moving_to_the_end(monkeypatch):
         solver = GeneralSolver(problem, 0.6, 256, width=width)
         return solver, helpers.march(solver, data[1:, 1:])
 
-    hinted, with_hint = run()
-    monkeypatch.setattr(general_module, "_toward", lambda now, end, fraction: None)
-    plain, without = run()
+    kept = run()
+    monkeypatch.setattr(general_module, name, replacement)
+    return kept, run(), width
+
+
+def test_the_sub_steps_start_from_the_pattern_moving_to_the_end(monkeypatch):
+    """A sub-step's active set starts from its start pattern moved part of the way to the whole step's
+    end pattern (_toward). The problem of each sub-step is strictly convex, so the start changes only
+    the iterations: on the split-stick punch history (256 nodes) every state is the same to 1e-12 of
+    its scale with and without the hint (the final patterns agree, so the last solves are the same
+    arithmetic), and the hint saves iterations (measured: 736 against 905 on it; 15 / 25 % on the random
+    histories, benchmarks/random_histories.py seed 0, Hertz / punch, 1024 nodes)."""
+    (hinted, with_hint), (plain, without), width = _split_history_with_and_without(
+        monkeypatch, "_toward", lambda now, end, fraction: None)
     assert hinted.counters["substeps"] > 0
     assert hinted.counters["iterations"] < plain.counters["iterations"]
     for (a, _), (b, _) in zip(with_hint, without):
@@ -967,8 +974,6 @@ def test_the_shadow_starts_from_the_fine_pattern_coarsened(monkeypatch):
     and shadow together; on the random histories at 1024 nodes the shadow's 3.8 -> 1.6 per solve)."""
     from types import SimpleNamespace
 
-    from halfslip.geometry import RoundedPunch
-
     # the mapping: fine cells 5 .. 11 (odd first), coarse cells 2 .. 5
     fine = SimpleNamespace(first=5, q=np.zeros(7), status=np.array([1, 1, 0, 0, 0, -1, -1], np.int8))
     first, status = general_module._coarsened(fine)
@@ -976,17 +981,8 @@ def test_the_shadow_starts_from_the_fine_pattern_coarsened(monkeypatch):
     # coarse 2 covers fine 4, 5 -> 5 (index 0); 3 -> 7 (2); 4 -> 9 (4); 5 -> 11 (6)
     assert status.tolist() == [1, 0, 0, -1]
 
-    data = np.loadtxt(SPLIT_HISTORY, delimiter=",")
-    problem = NormalProblem(RoundedPunch(flat_half_width=2e-3, radius=10e-3), 4 * (1 - 0.3**2) / 115e9)
-    width = max(problem.solve(P, M).right - problem.solve(P, M).left for P, M in data[1:, [1, 3]])
-
-    def run():
-        solver = GeneralSolver(problem, 0.6, 256, width=width)
-        return solver, helpers.march(solver, data[1:, 1:])
-
-    hinted, with_hint = run()
-    monkeypatch.setattr(general_module, "_coarsened", lambda memory: None)
-    plain, without = run()
+    (hinted, with_hint), (plain, without), _ = _split_history_with_and_without(
+        monkeypatch, "_coarsened", lambda memory: None)
     assert hinted.counters["iterations"] < plain.counters["iterations"]
     for (a, ra), (b, rb) in zip(with_hint, without):
         ca, cb = a.memory.coarse, b.memory.coarse
