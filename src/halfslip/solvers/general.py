@@ -609,14 +609,11 @@ class GeneralSolver(TangentialSolver):
         g = np.where(stick, glock, g)
         s = np.where(stick, 0.0, s)
         dissipation = float(np.sum(f * 0.5 * (cap0 + cap)[slip] * np.abs(s[slip]))) * h
+        shift = self._shift(delta_int, q, h, lat)
         if old:
             # cells that leave the contact during the step while slipping dissipate until they leave
-            dissipation += self._leaving(mem, N1, first, n, delta_int + (A / math.pi) * h * float(np.sum(q))
-                                         * math.log(self.datum / lat.datum), x, q, h, loads1.sigma)
+            dissipation += self._leaving(mem, N1, first, n, shift, x, q, h, loads1.sigma)
         G = G + s
-        # the reported shift in the package's datum: delta_l = delta_int + (A/pi) Q ln(l / l_int)
-        Qh = h * float(np.sum(q))
-        shift = delta_int + (A / math.pi) * Qh * math.log(self.datum / lat.datum)
         memory = GeneralMemory(N1, h, first, _frozen(status), _frozen(q), _frozen(g), _frozen(G), _frozen(cap),
                                shift)
         slipping = _slipping_edges(N1, loads0, loads1, f) if mem.normal is not None else (False, False)
@@ -655,7 +652,6 @@ class GeneralSolver(TangentialSolver):
         final pattern, T q, the iterations and the restarts.
         """
         status = status.copy()
-        qscale = float(qmax.max())
         seen = set()
         iterations = restarts = 0
         while True:
@@ -676,9 +672,8 @@ class GeneralSolver(TangentialSolver):
             Tq = lat.matvec(q)
             s = delta - Tq - r  # slip increment g - g_lock (internal datum)
             new = status.copy()
-            over = stick & (np.abs(q) > qmax + FLIP_TOL * qscale)
+            over, back = _flips(q, s, status, qmax, gscale, floor)
             new[over] = np.sign(q[over]).astype(np.int8)
-            back = ~stick & (status * s < -max(FLIP_TOL * gscale, floor))
             new[back] = 0
             if np.array_equal(new, status):
                 return q, delta, status, Tq, iterations, restarts
@@ -774,8 +769,7 @@ class GeneralSolver(TangentialSolver):
         xe = np.concatenate(match)
         K = kernel(xe[:, None] - x[None, stick], h, self.datum, A)
         dmoved = ddelta[None, :] - K @ dq  # (sides, 2k): the matched displacements' response
-        shift = delta + (A / math.pi) * h * float(np.sum(q)) * math.log(self.datum / lat.datum)
-        moved = self._displacement(shift, x, q, h, loads1.sigma, xe)
+        moved = self._displacement(self._shift(delta, q, h, lat), x, q, h, loads1.sigma, xe)
         before = self._displacement(mem.shift, mem.x, mem.q, mem.spacing, loads0.sigma, xe)
         # sides j: moved_j + sum_k size_k dmoved_jk(shape_k) - sum_k dmoved_jk(now_k) = before_j + size_j m1_j
         M = dmoved[:, :k] - np.diag(m1)
@@ -793,8 +787,7 @@ class GeneralSolver(TangentialSolver):
         glock = glock + np.stack(shapes, axis=1) @ size - np.stack(now, axis=1).sum(axis=1)
         Tq = lat.matvec(q)
         s = delta - Tq + sigma_term - glock
-        over = stick & (np.abs(q) > qmax + FLIP_TOL * float(qmax.max()))
-        back = ~stick & (status * s < -max(FLIP_TOL * gscale, floor))
+        over, back = _flips(q, s, status, qmax, gscale, floor)
         found = dict(zip(sides, size.tolist()))
         if np.any(over) or np.any(back):
             return None, found
@@ -828,6 +821,11 @@ class GeneralSolver(TangentialSolver):
         st = mem.status[out]
         slip = np.where(st * slip > 0.0, slip, 0.0)
         return float(np.sum(self.f * LEAVING_PRESSURE * mem.capacity[out] * np.abs(slip))) * mem.spacing
+
+    def _shift(self, delta_int: float, q: np.ndarray, h: float, lat: ToeplitzLattice) -> float:
+        """The rigid shift in the package's datum of the lattice's internal one:
+        delta_l = delta_int + (A/pi) Q ln(l / l_int)."""
+        return delta_int + (self.A / math.pi) * h * float(np.sum(q)) * math.log(self.datum / lat.datum)
 
     def _displacement(self, shift, xc, q, spacing, sigma, xs) -> np.ndarray:
         """Relative tangential displacement at ``xs`` of the shear ``q`` on the cells centred at ``xc``
@@ -1091,6 +1089,15 @@ def _coarsened(fine: GeneralMemory):
     count = (fine.first + fine.q.size + 1) // 2 - first
     idx = np.clip(2 * (first + np.arange(count)) + 1 - fine.first, 0, fine.q.size - 1)
     return first, fine.status[idx].copy()
+
+
+def _flips(q, s, status, qmax, gscale, floor):
+    """The active set's rule (FLIP_TOL): the stick cells over their bound and the slip cells whose
+    increment s opposes their direction, as two masks."""
+    stick = status == 0
+    over = stick & (np.abs(q) > qmax + FLIP_TOL * float(qmax.max()))
+    back = ~stick & (status * s < -max(FLIP_TOL * gscale, floor))
+    return over, back
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
