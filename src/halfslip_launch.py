@@ -11,12 +11,30 @@ system releases its module locks in weakref callbacks): Python then prints
 run went on to finish with status 0 as if no Ctrl-C had come (seen once in
 CI, an interrupt 0.3 s into start-up). During the import such an interrupt is
 recorded instead, and the command ends as interrupted once the import is done.
+
+And an interrupt can land inside an extension module's own import, which turns
+it into an ImportError (numpy importing datetime through PyCapsule_Import:
+"PyCapsule_Import could not import module "datetime"", a traceback and status
+1; seen once in about a dozen tries, 0.3 s into start-up). So the import runs
+under a SIGINT handler that records the signal before it raises the
+KeyboardInterrupt as Python's own does: whatever the import then ends in, a
+recorded signal ends the command as interrupted.
 """
+import signal
 import sys
 
 
 _lost = []
 """KeyboardInterrupts that Python could not raise during the import (they came inside a callback)."""
+
+_signalled = []
+"""SIGINTs received during the import."""
+
+
+def _on_sigint(signum, frame):
+    """SIGINT during the import: recorded, then raised as Python's default handler does."""
+    _signalled.append(signum)
+    raise KeyboardInterrupt
 
 
 def _record_interrupts(unraisable) -> None:
@@ -35,13 +53,19 @@ def _interrupted() -> None:
 
 def main() -> None:
     sys.unraisablehook = _record_interrupts
+    previous = signal.signal(signal.SIGINT, _on_sigint)
     try:
         from halfslip.cli import run_as_program
     except KeyboardInterrupt:
         _interrupted()
+    except BaseException:
+        if _signalled:  # the interrupt became another exception on its way out of the import
+            _interrupted()
+        raise
     finally:
+        signal.signal(signal.SIGINT, previous)
         sys.unraisablehook = sys.__unraisablehook__
-    if _lost:
+    if _lost or _signalled:
         _interrupted()
     run_as_program()
 

@@ -695,3 +695,50 @@ def test_an_interrupt_inside_a_callback_is_not_lost(hook):
     else:
         assert done.stdout.strip() == "carried on"
         assert "KeyboardInterrupt" in done.stderr
+
+
+_CONVERTED_INTERRUPT = """
+import os, signal, sys
+sys.path.insert(0, sys.argv[1])  # a stand-in halfslip whose cli import meets a Ctrl-C
+sys.modules.pop("halfslip", None)
+import halfslip_launch
+halfslip_launch.main()
+print("ran on")
+"""
+
+_FAKE_CLI = """
+import os, signal
+try:
+    os.kill(os.getpid(), signal.SIGINT)  # a Ctrl-C inside an extension's import ...
+    for _ in range(1000):
+        pass
+except KeyboardInterrupt:
+    # ... which turns it into an ImportError, as PyCapsule_Import did for numpy's datetime
+    raise ImportError('PyCapsule_Import could not import module "datetime"')
+
+
+def run_as_program():
+    print("ran")
+"""
+
+
+def test_an_interrupt_turned_into_an_import_error_ends_as_interrupted(tmp_path):
+    """A Ctrl-C inside an extension module's import can come out as an ImportError (numpy importing
+    datetime; once in about a dozen tries 0.3 s into start-up: a traceback, status 1). The launcher
+    records the signal and ends as interrupted: one line, status 130. Without a signal the same
+    ImportError is the error it is (the second case)."""
+    fake = tmp_path / "fake"
+    (fake / "halfslip").mkdir(parents=True)
+    (fake / "halfslip" / "__init__.py").write_text("")
+    (fake / "halfslip" / "cli.py").write_text(_FAKE_CLI)
+    launcher = str(Path(__file__).resolve().parents[1] / "src")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in (launcher, os.environ.get("PYTHONPATH")) if p))
+    done = subprocess.run([sys.executable, "-c", _CONVERTED_INTERRUPT, str(fake)], capture_output=True, text=True,
+                          timeout=60, env=env)
+    assert done.returncode == 130, done.stderr
+    assert done.stderr == "halfslip: interrupted\n"
+    assert done.stdout == ""
+    (fake / "halfslip" / "cli.py").write_text("raise ImportError('a real one')\n")
+    done = subprocess.run([sys.executable, "-c", _CONVERTED_INTERRUPT, str(fake)], capture_output=True, text=True,
+                          timeout=60, env=env)
+    assert done.returncode == 1 and "ImportError: a real one" in done.stderr
