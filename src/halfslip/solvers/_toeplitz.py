@@ -312,18 +312,17 @@ class ToeplitzLattice:
             stick[gaps] = False
             wide = np.zeros((m, rhs.shape[1]))
             wide[stick] = rhs
-            X = self._inverse_columns(m, runs, a)
+            X = self._inverse_columns(m, runs, a, gaps)
             Y = self.solve(m, wide)
             Y = Y - X @ np.linalg.solve(X[gaps], Y[gaps])
             return Y[stick], 0
         return self._cg_runs(runs, n, rhs, tol, max_iter)
 
-    def _inverse_columns(self, m: int, runs, a: int) -> np.ndarray:
-        """The columns of T_m^-1 at the gaps between ``runs`` (cells from ``a``): each gap's first column by
-        a solve, the others by the Gohberg-Semencul recursion from it (O(m) each)."""
+    def _inverse_columns(self, m: int, runs, a: int, gaps: np.ndarray) -> np.ndarray:
+        """The columns of T_m^-1 at the gaps between ``runs`` (``gaps``, their cells counted from ``a``): each
+        gap's first column by a solve, the others by the Gohberg-Semencul recursion from it (O(m) each)."""
         if m <= DENSE_CELLS:
-            cells = np.concatenate([np.arange(runs[i][1], runs[i + 1][0]) for i in range(len(runs) - 1)]) - a
-            return self._inverse(m)[:, cells]
+            return self._inverse(m)[:, gaps]
         starts = np.array([runs[i][1] - a for i in range(len(runs) - 1)], np.int64)
         lengths = np.array([runs[i + 1][0] - runs[i][1] for i in range(len(runs) - 1)], np.int64)
         E = np.zeros((m, starts.size))
