@@ -317,3 +317,28 @@ def test_solve_runs_is_the_dense_solve_on_the_stick_set(lattice, case):
     assert np.all(got[:, 2] == 0.0)
     assert _rel(got[:, :2], ref[:, :2]) <= 1e-11
     assert (iterations > 0) == case.startswith("cg")
+
+
+def test_displacements_from_the_kernel_table_are_the_kernel_products():
+    """GeneralSolver._products (the displacement of a cell range's shear at a few points) against the rows of
+    T formed by kernel(): at cell centres of the fine and the shadow lattice, from the lattices' tables in
+    their own datum converted to the package's (points left of the first cell and beyond the contact,
+    one and three columns), and off the lattice (kernel() itself). 1e-12: the table's offsets are k h
+    exactly, the formed rows' (j + 1/2) h - (i + 1/2) h, which round differently; measured 1.8e-14."""
+    from halfslip.solvers._toeplitz import kernel
+
+    from helpers import make
+
+    problem, solver = make("hertz", "general", nodes=256)
+    half = float(problem.half_width(P0))
+    rng = np.random.default_rng(7)
+    for h in (2 * half / 256, 4 * half / 256):
+        solver._lattice(h, 300)
+        first = -int(round(half / h))
+        xc = (first + 0.5 + np.arange(int(round(2 * half / h)))) * h
+        q = rng.standard_normal((xc.size, 3))
+        for xs in ((first - 3.5 + np.array([0.0, 1.0, 40.0, xc.size + 5.0])) * h,  # on the lattice
+                   np.array([xc[0] - 0.3 * h, 0.123 * h, xc[-1] + 2.7 * h])):       # off it
+            ref = kernel(xs[:, None] - xc[None, :], h, solver.datum, solver.A) @ q
+            assert _rel(solver._products(xs, xc, h, q), ref) <= 1e-12
+            assert _rel(solver._products(xs, xc, h, q[:, 0]), ref[:, 0]) <= 1e-12

@@ -84,6 +84,20 @@ def kernel(u: np.ndarray, h: float, datum: float, compliance: float) -> np.ndarr
     return -(compliance / math.pi) * (_G(u + 0.5 * h) - _G(u - 0.5 * h) - h * math.log(datum))
 
 
+@numba.njit(cache=True)
+def table_products(t, rows, cols, q):  # pragma: no cover - compiled
+    """sum_m t[|rows_i - cols_m|] q_m: products of T with the shear ``q`` (k columns) on the cells ``cols``
+    at the cells ``rows`` (lattice indices, any cells), from the kernel's table ``t`` (long enough for
+    every offset): the displacement at a few cells without forming their rows of T."""
+    out = np.zeros((rows.size, q.shape[1]))
+    for i in range(rows.size):
+        for m in range(cols.size):
+            tk = t[abs(rows[i] - cols[m])]
+            for c in range(q.shape[1]):
+                out[i, c] += tk * q[m, c]
+    return out
+
+
 def _G(v: np.ndarray) -> np.ndarray:
     a = np.abs(v)
     with np.errstate(divide="ignore", invalid="ignore"):
