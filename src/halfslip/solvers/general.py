@@ -524,12 +524,13 @@ class GeneralSolver(TangentialSolver):
 
     def _take(self, mem: GeneralMemory, h: float, loads0: Loads, loads1: Loads,
               N1: NormalSolution, path: EdgePath | None, load: _Load, hint=None, scale=None,
-              rounds: int = ARRIVAL_ROUNDS) -> _Outcome:
+              rounds: int = ARRIVAL_ROUNDS, g0: np.ndarray | None = None) -> _Outcome:
         """The step on the lattice of spacing ``h`` whose memory is ``mem``; ``hint`` = (first, status),
         where known, the pattern the active set starts from (the memory's otherwise: the solution is
         unique, the start sets only how many iterations it takes); ``scale`` {side: size} of the arrivals'
         increments at the growing edges (:meth:`_arrivals`), and ``rounds`` how many more times the sizes
-        may be found again from the lattice."""
+        may be found again from the lattice; ``g0`` the arrived cells' displacement at the step's start
+        where a take of the same step has it (a re-take after the fit)."""
         A, f = self.A, self.f
         first, n = _cells(N1.left, N1.right, h)
         x = (first + 0.5 + np.arange(n)) * h
@@ -559,9 +560,10 @@ class GeneralSolver(TangentialSolver):
             lo, hi = max(first, f0), min(first + n, f0 + guess.size)
             if hi > lo:
                 start[lo - first:hi - first] = guess[lo - f0:hi - f0]
-        g0 = None
         if not np.all(known):
-            glock[~known], g0 = self._arrivals(mem, loads0, loads1, N1, path, x[~known], scale)
+            glock[~known], g0 = self._arrivals(mem, loads0, loads1, N1, path, x[~known], scale, g0)
+        else:
+            g0 = None
         sigma_term = 0.25 * A * loads1.sigma * x
         r = glock - sigma_term  # stick: (T q)_i - delta = -r_i
         qmax = f * cap
@@ -598,7 +600,7 @@ class GeneralSolver(TangentialSolver):
                 if fit is not None and fit[0] is None:
                     # the sizes change the pattern: take the step again with the arrivals so locked
                     return self._take(mem, h, loads0, loads1, N1, path, load, (first, status), fit[1],
-                                      rounds - 1)
+                                      rounds - 1, g0)
                 if fit is not None:
                     q, delta_int, Tq, glock = fit
         self.counters["iterations"] += iterations
@@ -693,17 +695,18 @@ class GeneralSolver(TangentialSolver):
 
     # -- arrivals ---------------------------------------------------------------
     def _arrivals(self, mem: GeneralMemory, loads0: Loads, loads1: Loads, N1: NormalSolution,
-                  path: EdgePath | None, xs: np.ndarray, scale: dict | None = None):
+                  path: EdgePath | None, xs: np.ndarray, scale: dict | None = None, g0: np.ndarray | None = None):
         """Locked displacement of cells whose centres ``xs`` enter the contact during the step, and the
-        displacement they had at its start (None for a contact that forms in the step); with ``scale``
-        {side: size}, the increments at that edge are ARRIVAL_SHAPE's times the size (see :meth:`_take`)."""
+        displacement they had at its start (None for a contact that forms in the step; ``g0`` when the
+        caller has it already); with ``scale`` {side: size}, the increments at that edge are
+        ARRIVAL_SHAPE's times the size (see :meth:`_take`)."""
         A = self.A
         if path is None:
             path = EdgePath(self.problem, mem.normal, N1, loads0, loads1)
         out = np.empty(xs.size)
         if mem.normal is not None:
-            # the displacement at the start of the step, from the old shear
-            g0 = self._displacement(mem.shift, mem.x, mem.q, mem.spacing, loads0.sigma, xs)
+            if g0 is None:  # the displacement at the start of the step, from the old shear
+                g0 = self._displacement(mem.shift, mem.x, mem.q, mem.spacing, loads0.sigma, xs)
             for side, edge in ((-1, mem.normal.left), (1, mem.normal.right)):
                 mask = (xs < mem.normal.center) if side < 0 else (xs >= mem.normal.center)
                 if np.any(mask):
