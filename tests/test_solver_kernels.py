@@ -287,6 +287,7 @@ RUNS = {
     "gaps-wide": [(0, 30), (100, 229), (260, 290)],                   # gaps of 101, 60 other cells: Schur
     "gaps-long": [(0, 140), (200, 300)],                              # one gap of 60 between long runs
     "islands": [(0, 5), (100, 229), (290, 291)],                      # 6 cells beside the longest run: Schur
+    "island-gap": [(0, 17), (110, 400)],                              # 17 island cells, 93 gap cells: the gaps'
     "cg": [(0, 30), (200, 229), (400, 430)],                          # gaps of 341 > GAP_CELLS: CG, runs dense
     "cg-long": [(0, 140), (310, 480)],                                # CG with FFT solves on both runs
 }
@@ -317,6 +318,28 @@ def test_solve_runs_is_the_dense_solve_on_the_stick_set(lattice, case):
     assert np.all(got[:, 2] == 0.0)
     assert _rel(got[:, :2], ref[:, :2]) <= 1e-11
     assert (iterations > 0) == case.startswith("cg")
+
+
+@pytest.mark.parametrize("runs,route", [
+    ([(0, 5), (100, 229), (290, 291)], "_island_solve"),   # 6 island cells, 156 gap cells: 20 x 6 <= 156
+    ([(0, 17), (110, 400)], "_gap_solve"),                  # 17 island cells, 93 gap cells: 20 x 17 > 93
+    ([(0, 4), (200, 460)], "_island_solve"),                # gaps beyond GAP_CELLS: the islands' whatever
+    ([(0, 40), (50, 120), (130, 131), (140, 200)], "_gap_solve"),  # more island cells than gap cells
+])
+def test_solve_runs_takes_the_cheaper_schur_complement(lattice, monkeypatch, runs, route):
+    """The islands' complement costs a column of a solve on the longest run per island cell, the gaps' a
+    solve per gap and O(span) per gap cell (benchmarks/bench_solve_routes.py: equal at about ISLAND_COST = 20
+    gap cells per island cell): solve_runs takes the one so chosen, and its answer is the dense solve's."""
+    taken = []
+    for name in ("_island_solve", "_gap_solve"):
+        method = getattr(ToeplitzLattice, name)
+        monkeypatch.setattr(ToeplitzLattice, name,
+                            lambda self, *a, _m=method, _n=name: taken.append(_n) or _m(self, *a))
+    cells = sum(b - a for a, b in runs)
+    rhs = np.random.default_rng(3).standard_normal((cells, 2))
+    got, _ = lattice.solve_runs(runs, SIZE, rhs)
+    assert taken == [route]
+    assert _rel(got, _stick_solve(lattice, runs, SIZE, rhs)) <= 1e-11
 
 
 def test_displacements_from_the_kernel_table_are_the_kernel_products():

@@ -162,6 +162,16 @@ DENSE_CELLS = 128
 #: longest hold at most this many cells (one more column of a solve on the longest run per cell).
 ISLAND_CELLS = 48
 
+#: ... when the gaps between the runs hold at least this many cells per island cell (or more than
+#: GAP_CELLS); otherwise through the gaps' complement (below). What each costs, measured (one island run
+#: beside a run of 200 / 440 / 800 cells, two right-hand sides, benchmarks/bench_solve_routes.py): the
+#: islands' complement a column of a solve on the longest run per island cell (0.03-0.07 ms each), the gaps'
+#: one solve per gap plus O(span) per gap cell and a dense factorisation (0.08-0.2 ms up to 20 gap cells,
+#: 0.2-0.4 ms at 93, 0.5-0.8 ms at 160). Equal cost at about 20 gap cells per island cell. Until 0.3.6 the
+#: islands went first whenever they were fewer cells than the gaps (17 island cells beside 93 gap cells:
+#: 1.4 ms against 0.4 ms by the gaps, at a run of 800 cells).
+ISLAND_COST = 20
+
 #: ... or while the gaps between the runs hold at most this many cells: the complement is dense
 #: (GAP_CELLS^2 numbers, a factorisation of GAP_CELLS^3 / 3 operations), its columns of the inverse of
 #: the spanning run come from one solve per gap and the Gohberg-Semencul recursion (:func:`_next_columns`);
@@ -299,7 +309,8 @@ class ToeplitzLattice:
         through a Schur complement, whichever applies first of
 
         * the cells I of the runs other than the longest run R (islands beside
-          a stick zone), when fewer than the gaps and at most ISLAND_CELLS:
+          a stick zone), at most ISLAND_CELLS, when the gaps hold ISLAND_COST
+          times as many cells or more than GAP_CELLS:
           with X = T_RR^-1 [T_RI, b_R] (one solve on R),
           y_I = (T_II - T_IR X_1)^-1 (b_I - T_IR X_2), y_R = X_2 - X_1 y_I;
         * the gaps Z between the runs, at most GAP_CELLS, in the spanning run
@@ -318,19 +329,25 @@ class ToeplitzLattice:
         lengths = [stop - start for start, stop in runs]
         longest = int(np.argmax(lengths))
         islands = sum(lengths) - lengths[longest]
-        if islands < gaps.size and islands <= ISLAND_CELLS:
+        if islands <= ISLAND_CELLS and (ISLAND_COST * islands <= gaps.size or gaps.size > GAP_CELLS):
             return self._island_solve(runs, longest, rhs), 0
         if gaps.size <= GAP_CELLS:
-            m = b - a
-            stick = np.ones(m, bool)
-            stick[gaps] = False
-            wide = np.zeros((m, rhs.shape[1]))
-            wide[stick] = rhs
-            X = self._inverse_columns(m, runs, a, gaps)
-            Y = self.solve(m, wide)
-            Y = Y - X @ np.linalg.solve(X[gaps], Y[gaps])
-            return Y[stick], 0
+            return self._gap_solve(runs, gaps, rhs), 0
         return self._cg_runs(runs, n, rhs, tol, max_iter)
+
+    def _gap_solve(self, runs, gaps, rhs):
+        """T_SS^-1 rhs by the Schur complement of the ``gaps`` (cells counted from the first run's start) in
+        the spanning run (see :meth:`solve_runs`)."""
+        a, b = runs[0][0], runs[-1][1]
+        m = b - a
+        stick = np.ones(m, bool)
+        stick[gaps] = False
+        wide = np.zeros((m, rhs.shape[1]))
+        wide[stick] = rhs
+        X = self._inverse_columns(m, runs, a, gaps)
+        Y = self.solve(m, wide)
+        Y = Y - X @ np.linalg.solve(X[gaps], Y[gaps])
+        return Y[stick]
 
     def _inverse_columns(self, m: int, runs, a: int, gaps: np.ndarray) -> np.ndarray:
         """The columns of T_m^-1 at the gaps between ``runs`` (``gaps``, their cells counted from ``a``): each
