@@ -318,6 +318,12 @@ def test_solve_runs_is_the_dense_solve_on_the_stick_set(lattice, case):
     assert np.all(got[:, 2] == 0.0)
     assert _rel(got[:, :2], ref[:, :2]) <= 1e-11
     assert (iterations > 0) == case.startswith("cg")
+    # with a column of ones first (the rigid shift's), which one run and the gaps' route take from the cached
+    # T_n^-1 1: the same as solving it
+    got, _ = lattice.solve_runs(runs, SIZE, rhs[:, :2], ones=True)
+    ref = _stick_solve(lattice, runs, SIZE, np.column_stack((np.ones(cells), rhs[:, :2])))
+    assert got.shape == (cells, 3)
+    assert _rel(got, ref) <= 1e-11
 
 
 @pytest.mark.parametrize("runs,route", [

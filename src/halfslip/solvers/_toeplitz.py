@@ -207,6 +207,7 @@ class ToeplitzLattice:
         self._gs: dict[int, tuple] = {}
         self._circ: dict[int, tuple] = {}
         self._inv: dict[int, np.ndarray] = {}
+        self._unit: dict[int, np.ndarray] = {}
         self._t_ext = self.t
 
     # -- products ---------------------------------------------------------
@@ -301,9 +302,24 @@ class ToeplitzLattice:
             self._gs[n] = got
         return got
 
+    def unit(self, n: int) -> np.ndarray:
+        """T_n^-1 1 (read only), cached per n: the active set needs it at every solve (the rigid shift's
+        column), and it depends on the run's length only."""
+        got = self._unit.get(n)
+        if got is None:
+            got = self.solve(n, np.ones(n))
+            got.flags.writeable = False
+            if len(self._unit) >= GENERATORS:
+                del self._unit[next(iter(self._unit))]
+            self._unit[n] = got
+        return got
+
     def solve_runs(self, runs: list[tuple[int, int]], n: int, rhs: np.ndarray, tol: float = 1e-13,
-                   max_iter: int = 200) -> tuple[np.ndarray, int]:
-        """T_SS^-1 rhs on the stick set S = union of ``runs`` (half-open (start, stop) in 0..n).
+                   max_iter: int = 200, ones: bool = False) -> tuple[np.ndarray, int]:
+        """T_SS^-1 rhs on the stick set S = union of ``runs`` (half-open (start, stop) in 0..n); with
+        ``ones``, T_SS^-1 [1, rhs] (a column of ones first), the ones' column from :meth:`unit` where S is
+        one run or is solved through its gaps (T_m^-1 of ones on S is T_m^-1 1 less the columns of T_m^-1 at
+        the gaps, which that route has): a column less to solve.
 
         One run: a direct Gohberg-Semencul solve. Several runs: exactly,
         through a Schur complement, whichever applies first of
@@ -323,29 +339,35 @@ class ToeplitzLattice:
         has shape (|S|, k).
 """
         if len(runs) == 1:
-            return self.solve(runs[0][1] - runs[0][0], rhs), 0
+            m = runs[0][1] - runs[0][0]
+            y = self.solve(m, rhs)
+            return (np.column_stack((self.unit(m), y)) if ones else y), 0
         a, b = runs[0][0], runs[-1][1]
         gaps = np.concatenate([np.arange(runs[i][1], runs[i + 1][0]) for i in range(len(runs) - 1)]) - a
         lengths = [stop - start for start, stop in runs]
         longest = int(np.argmax(lengths))
         islands = sum(lengths) - lengths[longest]
         if islands <= ISLAND_CELLS and (ISLAND_COST * islands <= gaps.size or gaps.size > GAP_CELLS):
-            return self._island_solve(runs, longest, rhs), 0
+            return self._island_solve(runs, longest, _with_ones(rhs, ones)), 0
         if gaps.size <= GAP_CELLS:
-            return self._gap_solve(runs, gaps, rhs), 0
-        return self._cg_runs(runs, n, rhs, tol, max_iter)
+            return self._gap_solve(runs, gaps, rhs, ones), 0
+        return self._cg_runs(runs, n, _with_ones(rhs, ones), tol, max_iter)
 
-    def _gap_solve(self, runs, gaps, rhs):
-        """T_SS^-1 rhs by the Schur complement of the ``gaps`` (cells counted from the first run's start) in
-        the spanning run (see :meth:`solve_runs`)."""
+    def _gap_solve(self, runs, gaps, rhs, ones=False):
+        """T_SS^-1 rhs (with ``ones``: T_SS^-1 [1, rhs]) by the Schur complement of the ``gaps`` (cells counted
+        from the first run's start) in the spanning run (see :meth:`solve_runs`)."""
         a, b = runs[0][0], runs[-1][1]
         m = b - a
         stick = np.ones(m, bool)
         stick[gaps] = False
-        wide = np.zeros((m, rhs.shape[1]))
-        wide[stick] = rhs
         X = self._inverse_columns(m, runs, a, gaps)
-        Y = self.solve(m, wide)
+        k = rhs.shape[1]
+        Y = np.empty((m, k + 1) if ones else (m, k))
+        wide = np.zeros((m, k))
+        wide[stick] = rhs
+        Y[:, -k:] = self.solve(m, wide)
+        if ones:  # T_m^-1 of ones on the stick cells: T_m^-1 1 less T_m^-1 of ones on the gaps
+            Y[:, 0] = self.unit(m) - X.sum(axis=1)
         Y = Y - X @ np.linalg.solve(X[gaps], Y[gaps])
         return Y[stick]
 
@@ -435,6 +457,11 @@ class ToeplitzLattice:
             rz = rz_new
             it += 1
         return y, it
+
+
+def _with_ones(rhs: np.ndarray, ones: bool) -> np.ndarray:
+    """[1, rhs] with ``ones``, else ``rhs``."""
+    return np.column_stack((np.ones(rhs.shape[0]), rhs)) if ones else rhs
 
 
 @numba.njit(cache=True)

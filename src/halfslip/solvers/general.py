@@ -669,8 +669,7 @@ class GeneralSolver(TangentialSolver):
             qz = np.where(stick, 0.0, status * qmax)
             runs = _runs(stick)
             Tz = lat.matvec(qz)
-            rhs = np.stack((np.ones(int(stick.sum())), -(r + Tz)[stick]), axis=1)
-            y, cg = lat.solve_runs(runs, n, rhs)
+            y, cg = lat.solve_runs(runs, n, -(r + Tz)[stick][:, None], ones=True)
             self.counters["cg_iterations"] += cg
             delta = (total - qz.sum() - y[:, 1].sum()) / y[:, 0].sum()
             q = qz.copy()
@@ -766,8 +765,8 @@ class GeneralSolver(TangentialSolver):
         if not sides:
             return None
         k = len(sides)
-        cols = np.stack([np.ones(n)] + shapes + now, axis=1)[stick]
-        Y, cg = lat.solve_runs(_runs(stick), n, cols)
+        cols = np.stack(shapes + now, axis=1)[stick]
+        Y, cg = lat.solve_runs(_runs(stick), n, cols, ones=True)
         self.counters["cg_iterations"] += cg
         y0 = Y[:, 0]
         # the response of (q on the stick cells, delta) to a unit change of the locks along each column
