@@ -1067,7 +1067,16 @@ def _integrate(path: EdgePath, xs: np.ndarray, edge: float, side: int, A: float,
     on arrival, A sigma / 4 where the contact forms (fraction ``path.lam_lo``)
     plus the increments (which carry the rest of the bulk term, A sigma' / 4 in
     d(Delta-eps)/dlam: adding A sigma(lam_x) / 4 counted it twice).
+
+    Those of the stuck increments are kept on ``path`` (a re-take of the step after the arrivals' fit, and
+    the fit itself, ask for the same points again).
     """
+    key = None
+    if formation is None:
+        key = (xs.tobytes(), edge, side, A, change)
+        got = path.integrals.get(key)
+        if got is not None:
+            return got
     order = np.argsort(side * xs)
     xsorted = xs[order]
     ends = np.concatenate(([edge], xsorted))
@@ -1081,6 +1090,9 @@ def _integrate(path: EdgePath, xs: np.ndarray, edge: float, side: int, A: float,
     seg = (inc.reshape(pts.shape) @ _GL_W) * np.abs(b - a)
     out = np.empty(xs.size)
     out[order] = np.cumsum(seg)
+    if key is not None:
+        out.flags.writeable = False
+        path.integrals[key] = out
     return out
 
 
