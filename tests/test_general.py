@@ -830,14 +830,21 @@ ISLAND_HISTORY = helpers.DATA / "island_history.csv"
 
 
 def test_an_island_at_a_slipping_edge_is_in_the_estimate():
-    """A random (P, Q, M, sigma) history on Hertz (benchmarks/random_histories.py, seed 1) whose 95th
-    step shrinks the contact at both edges with a shear drive, so (S1) says both edges slip. At
-    1024 nodes a 3-cell stick island stays at the left contact edge, 0.2 of the width outside the
-    next stick interval; at 2048 and 4096 nodes and in the IC reference it is gone (the outermost
-    stick point is that interval's end). The shadow lattice has the island too, so the two lattices
-    agreed (estimate 1.6e-3 against an error of 0.2 until 0.3.2); an island of at most
-    UNCONFIRMED_ISLAND cells at an edge that (S1) says slips now reaches the estimate to the next
-    stick run: asserted, the estimate covers the island's distance to the interval within 10 %.
+    """A random (P, Q, M, sigma) history on Hertz (benchmarks/random_histories.py, seed 1).
+
+    Its 95th step shrinks the contact at both edges with a shear drive, so (S1) says both edges slip.
+    Until 0.3.6 a 3-cell stick island stayed at the left contact edge at 1024 nodes, 0.2 of the width
+    outside the next stick interval, which 2048 and 4096 nodes and the IC reference do not have: the
+    end cells carried their shear over the whole cell, not like the pressure over their supports.
+    Now 1024 nodes have no island there either (asserted: two stick intervals, the outermost stick
+    point that of the inner one).
+
+    The 89th step at 512 nodes has an island of 3.8 cells at the left contact edge (at 1024 and 2048
+    nodes it is there too, 0.006 - 0.007 of the width wide: this one is real) 0.24 of the width outside
+    the next stick interval. A lattice cannot tell such an island from one that is not, and the shadow
+    lattice has it too: an island of at most UNCONFIRMED_ISLAND cells at an edge that (S1) says slips
+    reaches the estimate to the next stick run (estimate 1.6e-3 against an error of 0.2 until 0.3.2):
+    asserted, the estimate covers the island's distance to the interval within 10 %.
     """
     data = np.loadtxt(ISLAND_HISTORY, delimiter=",")
     problem = NormalProblem(PROFILES["hertz"], 1.82e-11)
@@ -845,8 +852,14 @@ def test_an_island_at_a_slipping_edge_is_in_the_estimate():
     solver = GeneralSolver(problem, 0.6, 1024, width=width)
     state, report = march(solver, data[1:96, 1:])[-1]
     zones = solver.stick_zones(state)
+    assert report.converged and len(zones) == 2
+    assert zones[0][0] == state.stick_left and state.stick_left - state.contact_left > 0.15 * (
+        state.contact_right - state.contact_left)
+    solver = GeneralSolver(problem, 0.6, 512, width=width)
+    state, report = march(solver, data[1:90, 1:])[-1]
+    zones = solver.stick_zones(state)
     W = state.contact_right - state.contact_left
-    assert report.converged and len(zones) == 3
+    assert report.converged and len(zones) == 2
     island, inner = zones[0], zones[1]
     assert island[0] == state.stick_left and abs(island[0] - state.contact_left) < state.memory.spacing
     assert island[1] - island[0] < general_module.UNCONFIRMED_ISLAND * state.memory.spacing

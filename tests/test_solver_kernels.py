@@ -371,3 +371,98 @@ def test_displacements_from_the_kernel_table_are_the_kernel_products():
             ref = kernel(xs[:, None] - xc[None, :], h, solver.datum, solver.A) @ q
             assert _rel(solver._products(xs, xc, h, q), ref) <= 1e-12
             assert _rel(solver._products(xs, xc, h, q[:, 0]), ref[:, 0]) <= 1e-12
+
+
+# the reference's adaptive quadrature meets rounding at 1e-13 on the 1e-12 P0 punch (its pressure is a small
+# difference of large terms) and says so: the test's tolerance there is 1e5 above that
+@pytest.mark.filterwarnings("ignore::scipy.integrate.IntegrationWarning")
+@pytest.mark.parametrize("kind,load", [("hertz", 1.0), ("punch", 1.0), ("punch", 1e-12)])
+def test_end_cell_columns_are_the_pressure_shaped_force(kind, load):
+    """The end cells' correction columns of T (their shear spread like the pressure over their supports,
+    which reach to the contact's edges, less the same force over the cell) against adaptive quadrature of
+    the log kernel, at cells next to the end cells (the graded Gauss rule in theta, the singularity at the
+    own centre taken out) and beyond END_CELL_NEAR cells (the multipole series): 1e-11 of t_0 (measured
+    7e-15 at P0; a wrong moment, sign or term of the series is off by 1e-4 or more). Also a punch at 1e-12
+    P0, whose pressure is the flat punch's inverse square root at the edges and whose kink lies 4e-9 of the
+    flat beyond its edge, a near-singularity for the rule: 1e-8 of t_0 there (measured 2e-9; without the
+    cut at the kink 1.6e-5, with the cubic smoothstep of 24 points 5e-7)."""
+    from scipy.integrate import quad
+
+    import halfslip.solvers.general as G
+    from halfslip.geometry import NormalProblem
+    from halfslip.solvers._toeplitz import kernel
+
+    from helpers import A as A_STEEL
+    from helpers import PROFILES, W_FLAT
+
+    problem = NormalProblem(PROFILES[kind], A_STEEL)
+    N = problem.solve(load * P0, 0.0)
+    h = (N.right - N.left) / 64 * 1.013
+    first, n = G._cells(N.left, N.right, h)
+    x = (first + 0.5 + np.arange(n)) * h
+    solver = G.GeneralSolver(problem, 0.6, 64)
+    ends = G._end_supports(N, first, n, h)
+    C = solver._end_columns(N, first, h, ends, x)
+    t0 = abs(kernel(np.array([0.0]), h, 1.0, A_STEEL)[0])
+    c0, d0 = N.center, N.half_width
+
+    def in_theta(g, a, b, at=None):
+        """int_a^b g(xi) p(xi) dxi in theta (xi = c - d cos theta: smooth where p has an edge's root), cut at
+        ``at`` and at the ends of the punch's flat (p's x ln x kinks)."""
+        cuts = sorted({a, b} | {v for v in (at, -W_FLAT, W_FLAT) if v is not None and a < v < b})
+        ts = [math.acos(min(1.0, max(-1.0, (c0 - v) / d0))) for v in cuts]
+        return sum(quad(lambda t: g(c0 - d0 * math.cos(t)) * N.pressure(np.array([c0 - d0 * math.cos(t)]))[0]
+                        * d0 * math.sin(t), t0, t1, limit=400, epsabs=0.0, epsrel=1e-13)[0]
+                   for t0, t1 in zip(ts[:-1], ts[1:]))
+
+    for c, (k, a, b) in enumerate(ends):
+        force = in_theta(lambda v: 1.0, a, b)
+        lo = (first + k) * h
+        for i in sorted({0, 1, 2, 7, 8, 9, 10, n // 2, n - 9, n - 2, n - 1}):
+            xi = x[i]
+            shaped = in_theta(lambda v: math.log(abs(xi - v)), a, b, xi) * h / force
+            inner = [xi] if lo < xi < lo + h else None
+            cell = quad(lambda v: math.log(abs(xi - v)), lo, lo + h, points=inner, limit=400, epsabs=0.0,
+                        epsrel=1e-13)[0]
+            ref = -(A_STEEL / math.pi) * (shaped - cell)
+            assert abs(C[i, c] - ref) <= (1e-11 if load == 1.0 else 1e-8) * t0, (k, i, C[i, c], ref)
+
+
+def test_end_cell_lattice_solves_and_products_are_the_dense_ones():
+    """_EndCellLattice: T' = T + the two correction columns; its products and its stick-set solves (Woodbury
+    where an end cell sticks, with and without the column of ones, over the routes of solve_runs) against
+    the dense T' (1e-11; measured 1e-15)."""
+    import halfslip.solvers.general as G
+    from halfslip.geometry import NormalProblem
+
+    from helpers import A as A_STEEL
+    from helpers import PROFILES
+
+    problem = NormalProblem(PROFILES["punch"], A_STEEL)
+    N = problem.solve(P0, 0.0)
+    h = (N.right - N.left) / 300 * 1.013
+    first, n = G._cells(N.left, N.right, h)
+    x = (first + 0.5 + np.arange(n)) * h
+    solver = G.GeneralSolver(problem, 0.6, 300)
+    lat = solver._lattice(h, n)
+    ends = G._end_supports(N, first, n, h)
+    C = solver._end_columns(N, first, h, ends, x)
+    W = G._EndCellLattice(lat, n, ends, C, N, first)
+    T = lat.t[np.abs(np.arange(n)[:, None] - np.arange(n)[None, :])]
+    Tp = T.copy()
+    Tp[:, 0] += C[:, 0]
+    Tp[:, n - 1] += C[:, 1]
+    rng = np.random.default_rng(0)
+    v = rng.standard_normal(n)
+    assert _rel(W.matvec(v), Tp @ v) <= 1e-11
+    for runs in ([(0, n)], [(0, 10), (20, n)], [(3, 10), (20, n - 1)], [(0, 5), (30, 40), (50, n)],
+                 [(0, 140), (n - 5, n)]):
+        stick = np.zeros(n, bool)
+        for a, b in runs:
+            stick[a:b] = True
+        rhs = rng.standard_normal((int(stick.sum()), 2))
+        got, _ = W.solve_runs(runs, n, rhs)
+        assert _rel(got, np.linalg.solve(Tp[np.ix_(stick, stick)], rhs)) <= 1e-11
+        got, _ = W.solve_runs(runs, n, rhs, ones=True)
+        full = np.column_stack((np.ones(int(stick.sum())), rhs))
+        assert _rel(got, np.linalg.solve(Tp[np.ix_(stick, stick)], full)) <= 1e-11

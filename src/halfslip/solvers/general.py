@@ -63,7 +63,7 @@ from ..geometry import NormalProblem, NormalSolution
 from ..state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime, StepReport
 from ..state import frozen as _frozen
 from ._general_path import EdgePath, arrival_strains
-from ._toeplitz import ToeplitzLattice, kernel, table_products
+from ._toeplitz import ToeplitzLattice, _G, kernel, table_products
 from .base import BACKWARD_SLIP, FORWARD_SLIP, OUT_OF_CONTACT, STICK, TangentialSolver
 
 #: Default resolution: cells across the reference contact width (the widest contact of the history).
@@ -96,6 +96,24 @@ ARRIVAL_SHAPE = (1.0, 0.0)
 #: distance to it, and the edge passes the cell at a steady rate over a (sub-)step, so p / p_0 = sqrt(1 - u)
 #: over the fraction u of that time, whose mean is 2/3 (:meth:`GeneralSolver._leaving`).
 LEAVING_PRESSURE = 2.0 / 3.0
+#: Gauss-Legendre points (in theta, x = c - d cos theta) per piece of an end cell's support for its
+#: pressure-weighted log integral (:func:`_end_cell_potential`), mapped by the quintic smoothstep
+#: 10 u^3 - 15 u^4 + 6 u^5 (points graded towards both ends of each piece: the log singularity at the cell's
+#: own centre and the x ln x kinks of p at the ends of a punch flat). Against adaptive quadrature
+#: (tests/test_solver_kernels.py): 1e-13 of t_0 at P0; a punch at 1e-12 P0, whose kink lies 4e-9 of the flat
+#: beyond the contact edge (a near-singularity of the rule's piece), 1.7e-9 relative (24 points 8.7e-8,
+#: the cubic smoothstep at 24 points 5.1e-7).
+END_CELL_GAUSS = 32
+_EC_T, _EC_W = np.polynomial.legendre.leggauss(END_CELL_GAUSS)
+_EC_T, _EC_W = 0.5 * (_EC_T + 1.0), 0.5 * _EC_W
+_EC_S, _EC_DS = _EC_T ** 3 * (10.0 - 15.0 * _EC_T + 6.0 * _EC_T ** 2), 30.0 * _EC_T ** 2 * (1.0 - _EC_T) ** 2 * _EC_W
+#: Beyond this many cells from an end cell's centre its correction column comes from the multipole series of
+#: the log kernel (END_CELL_TERMS terms; the support lies within a cell of the centre, so the series converges
+#: like 1/END_CELL_NEAR^k: 8^-20 / 20 < 1e-19, below rounding) instead of the quadrature at every point.
+END_CELL_NEAR = 8
+END_CELL_TERMS = 20
+#: End cells kept (a step's fine and shadow lattices, their re-takes and the next step's start: a few).
+END_CELLS_KEPT = 16
 #: Active-set iterations before the projected-gradient restart.
 MAX_ACTIVE_SET = 100
 #: The active set changes a cell only for a violation above this, relative to f max p (Coulomb) and to the
@@ -307,6 +325,7 @@ class GeneralSolver(TangentialSolver):
             raise ValueError(f"travel must be >= 0, got {travel!r}")
         self._lattices: dict[float, ToeplitzLattice] = {}
         self._kinks, self._graded_kinks = _slope_kinks(problem.profile)
+        self._end_cells: dict[tuple, _EndCell] = {}
         self.counters = dict.fromkeys(("steps", "substeps", "iterations", "cg_iterations", "restarts",
                                        "normal_solves"), 0)
 
@@ -536,6 +555,10 @@ class GeneralSolver(TangentialSolver):
         x = (first + 0.5 + np.arange(n)) * h
         cap = load.capacity(first, n, h)
         lat = self._lattice(h, n)
+        # the end cells carry their shear like the pressure over their supports, which reach to the contact's
+        # edges (as their loads cap do)
+        ends = _end_supports(N1, first, n, h)
+        lat = _EndCellLattice(lat, n, ends, self._end_columns(N1, first, h, ends, x), N1, first)
         # what each cell carries into the step
         old = mem.normal is not None
         status = np.zeros(n, np.int8)
@@ -705,7 +728,7 @@ class GeneralSolver(TangentialSolver):
         out = np.empty(xs.size)
         if mem.normal is not None:
             if g0 is None:  # the displacement at the start of the step, from the old shear
-                g0 = self._displacement(mem.shift, mem.x, mem.q, mem.spacing, loads0.sigma, xs)
+                g0 = self._displacement(mem.shift, mem.x, mem.q, mem.spacing, loads0.sigma, xs, mem.normal)
             for side, edge in ((-1, mem.normal.left), (1, mem.normal.right)):
                 mask = (xs < mem.normal.center) if side < 0 else (xs >= mem.normal.center)
                 if np.any(mask):
@@ -774,8 +797,13 @@ class GeneralSolver(TangentialSolver):
         dq = ddelta[None, :] * y0[:, None] - Y[:, 1:]
         xe = np.concatenate(match)
         dmoved = ddelta[None, :] - self._products(xe, x[stick], h, dq)  # (sides, 2k): the matched displacements' response
-        moved = self._displacement(self._shift(delta, q, h, lat), x, q, h, loads1.sigma, xe)
-        before = self._displacement(mem.shift, mem.x, mem.q, mem.spacing, loads0.sigma, xe)
+        rows = np.cumsum(stick) - 1  # the end cells' shear acts over their supports (_EndCellLattice)
+        C = self._end_columns(lat.normal, lat.first, h, lat.ends, xe)
+        for c, (cell, _, _) in enumerate(lat.ends):
+            if stick[cell]:
+                dmoved -= C[:, c:c + 1] * dq[rows[cell]][None, :]
+        moved = self._displacement(self._shift(delta, q, h, lat), x, q, h, loads1.sigma, xe, lat.normal)
+        before = self._displacement(mem.shift, mem.x, mem.q, mem.spacing, loads0.sigma, xe, mem.normal)
         # sides j: moved_j + sum_k size_k dmoved_jk(shape_k) - sum_k dmoved_jk(now_k) = before_j + size_j m1_j
         M = dmoved[:, :k] - np.diag(m1)
         rhs = before - moved + dmoved[:, k:].sum(axis=1)
@@ -821,7 +849,7 @@ class GeneralSolver(TangentialSolver):
                        (xs - N0.left) / (N1.left - N0.left) if N1.left != N0.left else 1.0,
                        (xs - N0.right) / (N1.right - N0.right) if N1.right != N0.right else 1.0)
         lam = np.clip(lam, 0.0, 1.0)
-        g1 = self._displacement(shift, x, q, h, sigma1, xs)
+        g1 = self._displacement(shift, x, q, h, sigma1, xs, N1)
         slip = lam * (g1 - mem.g[out])
         st = mem.status[out]
         slip = np.where(st * slip > 0.0, slip, 0.0)
@@ -832,10 +860,34 @@ class GeneralSolver(TangentialSolver):
         delta_l = delta_int + (A/pi) Q ln(l / l_int)."""
         return delta_int + (self.A / math.pi) * h * float(np.sum(q)) * math.log(self.datum / lat.datum)
 
-    def _displacement(self, shift, xc, q, spacing, sigma, xs) -> np.ndarray:
+    def _displacement(self, shift, xc, q, spacing, sigma, xs, normal) -> np.ndarray:
         """Relative tangential displacement at ``xs`` of the shear ``q`` on the cells centred at ``xc``
-        (package datum, ``shift`` the rigid shift) under the bulk tension ``sigma``: T1."""
-        return shift - self._products(xs, xc, spacing, q) + 0.25 * self.A * sigma * xs
+        (package datum, ``shift`` the rigid shift) under the bulk tension ``sigma``: T1. ``normal`` is the
+        contact of the state whose cells ``xc`` are (all of them): its end cells carry their shear like
+        the pressure over their supports (:func:`_end_supports`)."""
+        out = shift - self._products(xs, xc, spacing, q) + 0.25 * self.A * sigma * xs
+        if normal is not None and xc.size:
+            first = int(round(xc[0] / spacing - 0.5))
+            ends = _end_supports(normal, first, xc.size, spacing)
+            C = self._end_columns(normal, first, spacing, ends, np.asarray(xs, dtype=float))
+            out = out - C @ q[[k for k, _, _ in ends]]
+        return out
+
+    def _end_columns(self, normal, first, h, ends, xs) -> np.ndarray:
+        """(T' - T) at the points ``xs`` for the end cells ``ends`` [(k, a, b)] of a state whose cells start
+        at lattice index ``first``: minus the displacement of a unit shear (force h) spread like the
+        pressure of ``normal`` over [a, b], less that of the same force spread over the cell (:class:`_EndCell`,
+        kept for the recent states). Shape (xs.size, len(ends)); the datum cancels."""
+        out = np.empty((xs.size, len(ends)))
+        for c, (k, a, b) in enumerate(ends):
+            key = (id(normal), a, b, first + k, h)
+            cell = self._end_cells.get(key)
+            if cell is None or cell.normal is not normal:
+                cell = self._end_cells[key] = _EndCell(normal, a, b, (first + k) * h, h, self._kinks)
+                if len(self._end_cells) > END_CELLS_KEPT:
+                    del self._end_cells[next(iter(self._end_cells))]
+            out[:, c] = -(self.A / math.pi) * cell.potential(xs)
+        return out
 
     def _products(self, xs, xc, spacing, q) -> np.ndarray:
         """sum_j t(xs_i - xc_j) q_j in the package datum, ``q`` of shape (n,) or (n, k).
@@ -1386,3 +1438,193 @@ def _apart(u: float, v: float) -> float:
     if math.isnan(u) or math.isnan(v):
         return 0.0 if math.isnan(u) and math.isnan(v) else math.inf
     return abs(u - v)
+
+
+# -- the end cells ------------------------------------------------------------------------------------------
+def _end_supports(normal, first: int, n: int, h: float) -> list:
+    """[(k, a, b)]: the cells (0 .. n-1 of a state's) whose shear acts over [a, b] instead of their cell: the
+    first over [L, (first + 1) h], the last over [(first + n - 1) h, R] (one cell: [L, R]); none when out
+    of contact."""
+    if normal is None or n == 0:
+        return []
+    L, R = normal.left, normal.right
+    if n == 1:
+        return [(0, L, R)]
+    return [(0, L, (first + 1) * h), (n - 1, (first + n - 1) * h, R)]
+
+
+class _EndCell:
+    """A force h spread like the pressure of ``normal`` over [a, b], against the same force over the cell
+    [lo, lo + h]: int ln|x - xi| w(xi) dxi over [a, b] (w = h p / int_a^b p) less int ln|x - xi| dxi over
+    the cell, at any points (:meth:`potential`).
+
+    In theta (xi = c - d cos theta) p d sin(theta) is smooth up to the contact edges (a square root or an
+    inverse square root there); [a, b] is cut at the profile's slope ``kinks`` (the ends of a punch flat:
+    p has an x ln x kink there, which a punch at 1e-12 P0 has 4e-9 of the flat inside its end cells) and,
+    for an x inside it, at x, whose log singularity is taken out (p(x) times the closed form of
+    int ln|x - xi|, plus the continuous rest). Each piece: Gauss-Legendre in theta mapped by the quintic
+    smoothstep, which grades the points towards both of its ends. Beyond END_CELL_NEAR cells of the cell's
+    centre x0 both integrals are the multipole series ln|x - xi| = ln|x - x0| - sum_k ((xi - x0) / (x -
+    x0))^k / k, whose ln cancels between the two (the same force) and whose k-th term is the difference of
+    the k-th moments. What depends on the cell only (the rule, the moments, the value at the cell's own
+    centre) is found once: a state's end cells are asked again at every take of the step and by the next.
+    """
+
+    def __init__(self, normal, a: float, b: float, lo: float, h: float, kinks: np.ndarray):
+        self.normal, self.a, self.b, self.lo, self.h = normal, a, b, lo, h
+        self.x0 = lo + 0.5 * h
+        # the pieces: cut at the kinks and at the cell's centre (inside the support: it is in the contact)
+        self.cuts = [a] + [float(k) for k in kinks if a < k < b] + [b]
+        own = a < self.x0 < b
+        xi, p, dxi = self._rule(sorted(self.cuts + [self.x0]) if own else self.cuts, self.x0 if own else None)
+        if own:
+            p, px = p[:-1], p[-1]
+        self.xi = xi
+        self.scale = h / float(np.sum(p * dxi))
+        self.w = p * dxi * self.scale  # weights of the force h
+        # moments of the pressure-shaped force less those of the uniform one (odd ones of the cell vanish), in
+        # cells: the k-th moment over h^(k + 1)
+        self.series = _end_cell_series(xi, self.w, self.x0, h, END_CELL_TERMS)
+        self.own = None
+        if own:  # the shaped potential at the cell's own centre: p(x0) ln|x0 - xi| in closed form, the rest
+            px *= self.scale
+            rest = np.log(np.abs(self.x0 - xi)) * (p * self.scale - px) * dxi
+            self.own = float(px * (_G(np.array([self.x0 - a]))[0] - _G(np.array([self.x0 - b]))[0]) + np.sum(rest))
+
+    def _rule(self, breaks, at=None):
+        """Points, pressure and weights of int dxi over the pieces between ``breaks`` (and the pressure at
+        ``at`` last, when given)."""
+        c, d = self.normal.center, self.normal.half_width
+        tb = np.arccos(np.clip((c - np.asarray(breaks, dtype=float)) / d, -1.0, 1.0))
+        t0, t1 = tb[:-1, None], tb[1:, None]
+        t = (t0 + (t1 - t0) * _EC_S[None, :]).ravel()
+        xi = c - d * np.cos(t)
+        p = self.normal.pressure(xi if at is None else np.append(xi, at))
+        return xi, p, d * np.sin(t) * ((t1 - t0) * _EC_DS[None, :]).ravel()
+
+    def potential(self, xs: np.ndarray) -> np.ndarray:
+        """The difference of the two log potentials at ``xs``."""
+        xs = np.ascontiguousarray(xs, dtype=float)
+        out, rest = _end_cell_kernel(xs, self.x0, self.h, self.lo, self.a, self.b, self.series, self.xi, self.w,
+                                     END_CELL_NEAR, math.nan if self.own is None else self.own,
+                                     LATTICE_POINT)
+        if rest.size:  # points inside the support other than the cell's own centre: cut there (rare)
+            out[rest] = self._near(xs[rest])
+        return out
+
+    def _near(self, xn: np.ndarray) -> np.ndarray:
+        a, b, lo, h = self.a, self.b, self.lo, self.h
+        part = np.empty(xn.size)
+        inside = (xn > a) & (xn < b)
+        if np.any(~inside):
+            part[~inside] = np.log(np.abs(xn[~inside, None] - self.xi[None, :])) @ self.w
+        for i in np.flatnonzero(inside):
+            x = float(xn[i])
+            if self.own is not None and abs(x - self.x0) <= LATTICE_POINT * h:  # the cell's own centre
+                part[i] = self.own
+                continue
+            px = float(self.normal.pressure(np.array([x]))[0]) * self.scale
+            xj, pj, dj = self._rule(sorted(self.cuts + [x]))
+            # the rest, (p(xi) scale - p(x)) ln|x - xi|, vanishes at x like (xi - x) ln|xi - x|
+            rest = np.log(np.abs(x - xj)) * (pj * self.scale - px) * dj
+            part[i] = px * float(_G(np.array([x - a]))[0] - _G(np.array([x - b]))[0]) + float(np.sum(rest))
+        return part - (_G(xn - lo) - _G(xn - lo - h))
+
+
+@numba.njit(cache=True)
+def _end_cell_series(xi, w, x0, h, terms):  # pragma: no cover - compiled
+    """The multipole series' coefficients of _EndCell: (k-th moment of the force ``w`` at ``xi`` less that of
+    the same force spread over the cell of centre x0) / k, in cells (moments over h^(k + 1))."""
+    out = np.zeros(terms)
+    for j in range(xi.size):
+        s = (xi[j] - x0) / h
+        v = w[j] / h
+        for k in range(terms):
+            v *= s
+            out[k] += v
+    for k in range(terms):
+        if (k + 1) % 2 == 0:
+            out[k] -= 2.0 * 0.5 ** (k + 2) / (k + 2)
+        out[k] /= k + 1
+    return out
+
+
+@numba.njit(cache=True)
+def _end_cell_kernel(xs, x0, h, lo, a, b, series, xi, w, near, own, tol):  # pragma: no cover - compiled
+    """_EndCell.potential at ``xs``: the multipole series beyond ``near`` cells of x0, the rule's sum
+    nearer, ``own`` at the cell's centre; the indices of the other points inside (a, b), left for the
+    caller (their out is not set)."""
+    out = np.empty(xs.size)
+    rest = np.empty(xs.size, np.int64)
+    count = 0
+    for i in range(xs.size):
+        x = xs[i]
+        if abs(x - x0) >= near * h:
+            u = h / (x - x0)
+            acc = 0.0
+            for m in range(series.size, 0, -1):
+                acc = (acc + series[m - 1]) * u
+            out[i] = -h * acc
+            continue
+        if a < x < b:
+            if own == own and abs(x - x0) <= tol * h:
+                shaped = own
+            else:
+                rest[count] = i
+                count += 1
+                continue
+        else:
+            shaped = 0.0
+            for j in range(xi.size):
+                shaped += w[j] * math.log(abs(x - xi[j]))
+        out[i] = shaped - (_g(x - lo) - _g(x - lo - h))
+    return out, rest[:count]
+
+
+@numba.njit(cache=True)
+def _g(v):  # pragma: no cover - compiled
+    """v ln|v| - v (0 at 0): _toeplitz._G of one number."""
+    return v * math.log(abs(v)) - v if v != 0.0 else 0.0
+
+
+class _EndCellLattice:
+    """T' = T + the end cells' correction columns C on one take's n cells (their shear spread like the
+    pressure over their supports, :func:`_end_supports`; collocation stays at the cell centres, so T' is not
+    symmetric): products, and solves on a stick set by Woodbury where an end cell sticks, with the
+    correction columns as more right-hand sides of the lattice's own solve. Used as the ToeplitzLattice of
+    the take by the active set, the gross-sliding branch and the arrivals' fit."""
+
+    def __init__(self, lat: ToeplitzLattice, n: int, ends: list, columns: np.ndarray, normal, first: int):
+        self.lat, self.n, self.ends = lat, n, ends
+        self.t, self.datum, self.h = lat.t, lat.datum, lat.h  # t: the projected gradient's bound
+        self.idx = np.array([k for k, _, _ in ends], np.int64)
+        self.C = columns
+        self.normal, self.first = normal, first
+        self._woodbury: dict[tuple, tuple] = {}
+
+    def matvec(self, v: np.ndarray) -> np.ndarray:
+        """T' v."""
+        return self.lat.matvec(v) + self.C @ v[self.idx]
+
+    def solve_runs(self, runs, n, rhs, ones: bool = False):
+        """T'_SS^-1 rhs (with ``ones``: T'_SS^-1 [1, rhs]) on the stick set of ``runs``; the CG iterations."""
+        stick = np.zeros(n, bool)
+        for a, b in runs:
+            stick[a:b] = True
+        sel = [c for c, k in enumerate(self.idx) if stick[k]]
+        if not sel:
+            return self.lat.solve_runs(runs, n, rhs, ones=ones)
+        pos = (np.cumsum(stick) - 1)[self.idx[sel]]
+        key = tuple(runs)
+        got = self._woodbury.get(key)
+        cg = 0
+        if got is None:  # T_SS^-1 U and the capacitance (I + V^T T^-1 U)^-1 of this stick set, kept for the take
+            y, cg = self.lat.solve_runs(runs, n, np.concatenate((rhs, self.C[stick][:, sel]), axis=1), ones=ones)
+            k = rhs.shape[1] + (1 if ones else 0)
+            y, Z = y[:, :k], y[:, k:]
+            got = self._woodbury[key] = (Z, np.linalg.inv(np.eye(len(sel)) + Z[pos]))
+        else:
+            y, cg = self.lat.solve_runs(runs, n, rhs, ones=ones)
+        Z, capacitance = got
+        # (T + U V^T)^-1 y = T^-1 y - T^-1 U (I + V^T T^-1 U)^-1 V^T T^-1 y, V^T picking the end cells' rows
+        return y - Z @ (capacitance @ y[pos]), cg
