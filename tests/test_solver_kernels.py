@@ -426,6 +426,13 @@ def test_end_cell_columns_are_the_pressure_shaped_force(kind, load):
                         epsrel=1e-13)[0]
             ref = -(A_STEEL / math.pi) * (shaped - cell)
             assert abs(C[i, c] - ref) <= (1e-11 if load == 1.0 else 1e-8) * t0, (k, i, C[i, c], ref)
+        # a point inside the support other than the cell's centre (the rule cut there too)
+        xi = 0.5 * (a + lo + 0.5 * h) if k == 0 else 0.5 * (b + lo + 0.5 * h)
+        shaped = in_theta(lambda v: math.log(abs(xi - v)), a, b, xi) * h / force
+        cell = quad(lambda v: math.log(abs(xi - v)), lo, lo + h, points=[xi], limit=400, epsabs=0.0,
+                    epsrel=1e-13)[0]
+        got = solver._end_columns(N, first, h, ends, np.array([xi]))[0, c]
+        assert abs(got - (-(A_STEEL / math.pi) * (shaped - cell))) <= (1e-11 if load == 1.0 else 1e-8) * t0
 
 
 def test_end_cell_lattice_solves_and_products_are_the_dense_ones():

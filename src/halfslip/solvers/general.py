@@ -97,10 +97,10 @@ ARRIVAL_SHAPE = (1.0, 0.0)
 #: over the fraction u of that time, whose mean is 2/3 (:meth:`GeneralSolver._leaving`).
 LEAVING_PRESSURE = 2.0 / 3.0
 #: Gauss-Legendre points (in theta, x = c - d cos theta) per piece of an end cell's support for its
-#: pressure-weighted log integral (:func:`_end_cell_potential`), mapped by the quintic smoothstep
+#: pressure-weighted log integral (:class:`_EndCell`), mapped by the quintic smoothstep
 #: 10 u^3 - 15 u^4 + 6 u^5 (points graded towards both ends of each piece: the log singularity at the cell's
 #: own centre and the x ln x kinks of p at the ends of a punch flat). Against adaptive quadrature
-#: (tests/test_solver_kernels.py): 1e-13 of t_0 at P0; a punch at 1e-12 P0, whose kink lies 4e-9 of the flat
+#: (tests/test_solver_kernels.py): 7e-15 of t_0 at P0; a punch at 1e-12 P0, whose kink lies 4e-9 of the flat
 #: beyond the contact edge (a near-singularity of the rule's piece), 1.7e-9 relative (24 points 8.7e-8,
 #: the cubic smoothstep at 24 points 5.1e-7).
 END_CELL_GAUSS = 32
@@ -1508,21 +1508,16 @@ class _EndCell:
         out, rest = _end_cell_kernel(xs, self.x0, self.h, self.lo, self.a, self.b, self.series, self.xi, self.w,
                                      END_CELL_NEAR, math.nan if self.own is None else self.own,
                                      LATTICE_POINT)
-        if rest.size:  # points inside the support other than the cell's own centre: cut there (rare)
-            out[rest] = self._near(xs[rest])
+        if rest.size:
+            out[rest] = self._inside(xs[rest])
         return out
 
-    def _near(self, xn: np.ndarray) -> np.ndarray:
+    def _inside(self, xn: np.ndarray) -> np.ndarray:
+        """The potentials at points inside the support other than the cell's centre (rare: the lattice's
+        points inside an end cell's support are its own centre): the rule cut at each of them."""
         a, b, lo, h = self.a, self.b, self.lo, self.h
         part = np.empty(xn.size)
-        inside = (xn > a) & (xn < b)
-        if np.any(~inside):
-            part[~inside] = np.log(np.abs(xn[~inside, None] - self.xi[None, :])) @ self.w
-        for i in np.flatnonzero(inside):
-            x = float(xn[i])
-            if self.own is not None and abs(x - self.x0) <= LATTICE_POINT * h:  # the cell's own centre
-                part[i] = self.own
-                continue
+        for i, x in enumerate(xn.tolist()):
             px = float(self.normal.pressure(np.array([x]))[0]) * self.scale
             xj, pj, dj = self._rule(sorted(self.cuts + [x]))
             # the rest, (p(xi) scale - p(x)) ln|x - xi|, vanishes at x like (xi - x) ln|xi - x|
