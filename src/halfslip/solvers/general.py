@@ -1603,18 +1603,22 @@ class _EndCellLattice:
 
     def solve_runs(self, runs, n, rhs, ones: bool = False):
         """T'_SS^-1 rhs (with ``ones``: T'_SS^-1 [1, rhs]) on the stick set of ``runs``; the CG iterations."""
-        stick = np.zeros(n, bool)
-        for a, b in runs:
-            stick[a:b] = True
-        sel = [c for c, k in enumerate(self.idx) if stick[k]]
+        # the end cells stick when the first run starts at the first cell, the last ends at the last
+        size = sum(b - a for a, b in runs)
+        sel, pos = [], []
+        for c, k in enumerate(self.idx.tolist()):
+            if k == 0 and runs[0][0] == 0:
+                sel.append(c), pos.append(0)
+            elif k == n - 1 and k > 0 and runs[-1][1] == n:
+                sel.append(c), pos.append(size - 1)
         if not sel:
             return self.lat.solve_runs(runs, n, rhs, ones=ones)
-        pos = (np.cumsum(stick) - 1)[self.idx[sel]]
         key = tuple(runs)
         got = self._woodbury.get(key)
         cg = 0
         if got is None:  # T_SS^-1 U and the capacitance (I + V^T T^-1 U)^-1 of this stick set, kept for the take
-            y, cg = self.lat.solve_runs(runs, n, np.concatenate((rhs, self.C[stick][:, sel]), axis=1), ones=ones)
+            U = np.concatenate([self.C[a:b] for a, b in runs])[:, sel]
+            y, cg = self.lat.solve_runs(runs, n, np.concatenate((rhs, U), axis=1), ones=ones)
             k = rhs.shape[1] + (1 if ones else 0)
             y, Z = y[:, :k], y[:, k:]
             got = self._woodbury[key] = (Z, np.linalg.inv(np.eye(len(sel)) + Z[pos]))
