@@ -796,12 +796,10 @@ class GeneralSolver(TangentialSolver):
         ddelta = Y[:, 1:].sum(axis=0) / y0.sum()
         dq = ddelta[None, :] * y0[:, None] - Y[:, 1:]
         xe = np.concatenate(match)
-        dmoved = ddelta[None, :] - self._products(xe, x[stick], h, dq)  # (sides, 2k): the matched displacements' response
-        rows = np.cumsum(stick) - 1  # the end cells' shear acts over their supports (_EndCellLattice)
-        C = self._end_columns(lat.normal, lat.first, h, lat.ends, xe)
-        for c, (cell, _, _) in enumerate(lat.ends):
-            if stick[cell]:
-                dmoved -= C[:, c:c + 1] * dq[rows[cell]][None, :]
+        response = np.zeros((n, dq.shape[1]))
+        response[stick] = dq
+        # (sides, 2k): the matched displacements' response (the end cells' shear over their supports)
+        dmoved = ddelta[None, :] + self._displacement(0.0, x, response, h, 0.0, xe, lat.normal)
         moved = self._displacement(self._shift(delta, q, h, lat), x, q, h, loads1.sigma, xe, lat.normal)
         before = self._displacement(mem.shift, mem.x, mem.q, mem.spacing, loads0.sigma, xe, mem.normal)
         # sides j: moved_j + sum_k size_k dmoved_jk(shape_k) - sum_k dmoved_jk(now_k) = before_j + size_j m1_j
@@ -864,8 +862,9 @@ class GeneralSolver(TangentialSolver):
         """Relative tangential displacement at ``xs`` of the shear ``q`` on the cells centred at ``xc``
         (package datum, ``shift`` the rigid shift) under the bulk tension ``sigma``: T1. ``normal`` is the
         contact of the state whose cells ``xc`` are (all of them): its end cells carry their shear like
-        the pressure over their supports (:func:`_end_supports`)."""
-        out = shift - self._products(xs, xc, spacing, q) + 0.25 * self.A * sigma * xs
+        the pressure over their supports (:func:`_end_supports`). ``q`` of shape (n,) or (n, k)."""
+        bulk = 0.25 * self.A * sigma * xs
+        out = shift - self._products(xs, xc, spacing, q) + (bulk[:, None] if np.ndim(q) == 2 else bulk)
         if normal is not None and xc.size:
             first = int(round(xc[0] / spacing - 0.5))
             ends = _end_supports(normal, first, xc.size, spacing)
@@ -1485,11 +1484,8 @@ class _EndCell:
         # moments of the pressure-shaped force less those of the uniform one (odd ones of the cell vanish), in
         # cells: the k-th moment over h^(k + 1)
         self.series = _end_cell_series(xi, self.w, self.x0, h, END_CELL_TERMS)
-        self.own = None
-        if own:  # the shaped potential at the cell's own centre: p(x0) ln|x0 - xi| in closed form, the rest
-            px *= self.scale
-            rest = np.log(np.abs(self.x0 - xi)) * (p * self.scale - px) * dxi
-            self.own = float(px * (_G(np.array([self.x0 - a]))[0] - _G(np.array([self.x0 - b]))[0]) + np.sum(rest))
+        # the shaped potential at the cell's own centre, from the same points (the rule is cut there)
+        self.own = self._shaped_at(self.x0, xi, p, dxi, px) if own else None
 
     def _rule(self, breaks, at=None):
         """Points, pressure and weights of int dxi over the pieces between ``breaks`` (and the pressure at
@@ -1515,15 +1511,19 @@ class _EndCell:
     def _inside(self, xn: np.ndarray) -> np.ndarray:
         """The potentials at points inside the support other than the cell's centre (rare: the lattice's
         points inside an end cell's support are its own centre): the rule cut at each of them."""
-        a, b, lo, h = self.a, self.b, self.lo, self.h
         part = np.empty(xn.size)
         for i, x in enumerate(xn.tolist()):
-            px = float(self.normal.pressure(np.array([x]))[0]) * self.scale
-            xj, pj, dj = self._rule(sorted(self.cuts + [x]))
-            # the rest, (p(xi) scale - p(x)) ln|x - xi|, vanishes at x like (xi - x) ln|xi - x|
-            rest = np.log(np.abs(x - xj)) * (pj * self.scale - px) * dj
-            part[i] = px * float(_G(np.array([x - a]))[0] - _G(np.array([x - b]))[0]) + float(np.sum(rest))
-        return part - (_G(xn - lo) - _G(xn - lo - h))
+            xj, pj, dj = self._rule(sorted(self.cuts + [x]), x)
+            part[i] = self._shaped_at(x, xj, pj[:-1], dj, pj[-1])
+        return part - (_G(xn - self.lo) - _G(xn - self.lo - self.h))
+
+    def _shaped_at(self, x: float, xi, p, dxi, px: float) -> float:
+        """int ln|x - xi| w(xi) dxi at a point x inside the support, from a rule cut at x (points ``xi``,
+        pressure ``p``, weights ``dxi``; ``px`` the pressure at x): p(x) int ln|x - xi| in closed form, plus
+        the rest, (p(xi) - p(x)) ln|x - xi|, which vanishes at x like (xi - x) ln|xi - x|."""
+        px *= self.scale
+        rest = np.log(np.abs(x - xi)) * (p * self.scale - px) * dxi
+        return float(px * (_G(np.array([x - self.a]))[0] - _G(np.array([x - self.b]))[0]) + np.sum(rest))
 
 
 @numba.njit(cache=True)
