@@ -242,9 +242,11 @@ def check_step(solver, prev, state, report):
         else:  # every cell stuck: slip zones narrower than the end cells, which (S1) says slip
             assert 0 < stuck.size < n or (stuck.size == n and (state.stick_left > L or state.stick_right < R))
         assert solver.stick_intervals(state) >= 1
-        if n > 1:  # the outermost stick points lie within a cell outside the outermost stuck cells' centres
-            assert centres[stuck[0]] - h <= state.stick_left <= centres[stuck[0]] + 1e-12 * W
-            assert centres[stuck[-1]] - 1e-12 * W <= state.stick_right <= centres[stuck[-1]] + h
+        if n > 1:  # the outermost stick points lie within a cell outside the outermost stuck cells' centres, or
+            # as far inside as the lattice's response to a square-root edge puts them (EDGE_RULE at rho = 0)
+            inside = general_module.EDGE_INSIDE * h + 1e-12 * W
+            assert centres[stuck[0]] - h <= state.stick_left <= centres[stuck[0]] + inside
+            assert centres[stuck[-1]] - inside <= state.stick_right <= centres[stuck[-1]] + h
     force = solver.shear_force(mem)
     assert force == pytest.approx(carried, abs=FORCE_TOL * F * P)
     x, w = contact_nodes(solver, mem)

@@ -158,6 +158,49 @@ EDGE_PLACEMENT = 0.1
 #: and the lattice sees no slipping cell, 0.23 .. 0.48 of a cell at 1000 nodes (0.36 at 2000): the local
 #: form is not that of a receding edge. Until 0.3.3 such steps were raised to a whole cell.
 SUBCELL_PLACEMENT = 0.5
+#: The lattice's own response to a square-root stick edge (benchmarks/calibrate_edge_rule.py): with rho =
+#: m_k / m_(k-1) the traction margins f cap - s q of the outermost stick cell k and its inner neighbour,
+#: the stick edge lies u(rho) = polyval(EDGE_RULE, rho) cells outward of x_k (from -0.17 at rho = 0, where
+#: cell k is about to slip, to 0.82 at EDGE_RULE_RHO, where its outer neighbour is about to stick). The
+#: local discrete problem is the same at every scale (the kernel's cell integrals are h times a fixed
+#: sequence plus a constant that the rigid shift absorbs), so u depends on rho alone to leading order:
+#: fitted on J1 (Hertz, 2048 nodes, residual 1.2e-4 of a cell), it places J1 and J2 on Hertz and on the
+#: rounded punch at 256 - 1024 nodes to at most 0.024 of a cell (0.17 - 0.20 with the square of the
+#: margin extrapolated linearly, 0.3.3 - 0.3.6).
+EDGE_RULE = (0.181491, 0.103012, 0.448258, 0.997502, -0.174637)
+EDGE_RULE_RHO = 0.7005
+#: The largest rho a square-root margin gives on the lattice: slip zones of a few cells go a little beyond
+#: EDGE_RULE_RHO (the next order of the local form; J1 and J2 on both profiles at 128 - 512 nodes: up to 0.79
+#: on the punch at 128 nodes, 0.72 at 256, 0.70 at 512, their edges 0.70 - 0.82 of a cell outward). Up to
+#: here an edge is put where EDGE_RULE ends (0.82; at most 0.12 of a cell off there); beyond it the margin
+#: does not follow the square root (a margin an earlier slip left, a band of cells near their bound) and the
+#: edge is bracketed by the two centres.
+EDGE_RULE_REACH = 0.8
+#: Slip zones at a contact edge E narrower than about two cells, placed by the local Cattaneo form
+#: (x - E) m^2 = x - c from the two outermost stick cells (_run_edges), within the end cell where it sticks
+#: (END_RULE_WITHIN) or beyond it where it alone slips (END_RULE_END): that form's estimate w_est of the slip
+#: zone's width is off by up to 0.2 of a cell, by an amount that depends on w_est and on the distance u_e
+#: from the end cell's centre to E (both in cells) alone. The lattice's response, w - w_est =
+#: sum c[i][j] w_est^i u_e^j, fitted on J1 (Hertz, 1024 nodes, the contact edge at 41 places across a cell;
+#: benchmarks/calibrate_edge_rule.py): J1 at 256 nodes on both profiles 95th percentile 0.03 / 0.02 of a
+#: cell, largest 0.085 / 0.055 (the local form alone: 0.18 / 0.20), the largest where the margins barely
+#: change with the width, before the branch changes.
+END_RULE_WITHIN = (
+    (9.059554e-02, -1.897481e+00, 1.169895e+01, -2.987890e+01, 3.350241e+01, -1.364702e+01),
+    (2.797208e+00, -2.910195e+01, 9.741024e+01, -1.379325e+02, 6.885088e+01, 0.000000e+00),
+    (1.298867e+01, -8.877401e+01, 1.967193e+02, -1.361102e+02, 0.000000e+00, 0.000000e+00),
+    (3.056320e+01, -1.382052e+02, 1.459799e+02, 0.000000e+00, 0.000000e+00, 0.000000e+00),
+    (3.692215e+01, -7.872075e+01, 0.000000e+00, 0.000000e+00, 0.000000e+00, 0.000000e+00),
+    (1.688621e+01, 0.000000e+00, 0.000000e+00, 0.000000e+00, 0.000000e+00, 0.000000e+00),
+)
+END_RULE_END = (
+    (1.996221e-01, -2.485424e-02, -4.923960e+00, -1.595531e+01, -1.930837e+01, -9.021456e+00),
+    (-2.142632e-02, 1.000087e+01, 4.710284e+01, 7.807370e+01, 4.407653e+01, 0.000000e+00),
+    (-4.984379e+00, -4.698341e+01, -1.168284e+02, -8.766971e+01, 0.000000e+00, 0.000000e+00),
+    (1.562771e+01, 7.769391e+01, 8.739357e+01, 0.000000e+00, 0.000000e+00, 0.000000e+00),
+    (-1.938142e+01, -4.359763e+01, 0.000000e+00, 0.000000e+00, 0.000000e+00, 0.000000e+00),
+    (8.703506e+00, 0.000000e+00, 0.000000e+00, 0.000000e+00, 0.000000e+00, 0.000000e+00),
+)
 #: A stick run at a contact edge that (S1) says slips, this many cells wide or less, is an island that the
 #: shadow lattice (cells twice as wide) cannot confirm: two of its cells. On the random histories at 1024
 #: nodes such runs were 1-11 cells wide (Hertz) and 1 or >= 96 (punch); one of 3 cells at a receding
@@ -1280,31 +1323,32 @@ def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
                slipping=(False, False)) -> tuple[float, float, float]:
     """Edges of the stick run of cells i..k (the outermost stick points for the first and last stuck
     cells), within the cell, and how far either may be from where it is put, in cells, where that is
-    more than the square-root law's EDGE_PLACEMENT (SUBCELL_PLACEMENT for the local Cattaneo form, half
-    a cell for a bracketed edge, below; 0 otherwise): the traction margin
-    f cap - s q of the outermost stick cells vanishes like the square root of the distance to the
-    edge, so its square is extrapolated linearly from the two outermost stick cells, to a zero
-    between the stick cell's centre and its slipping neighbour's. Where the zero would fall beyond
-    the neighbour's centre, the margin does not grow inwards like the square root (a band of cells
-    within a small fraction of their bound, as before a load maximum, or a margin an earlier slip
-    left): the edge is then bracketed by the two centres and put midway, at most half a cell from
-    either (since 0.3.3; until then at the neighbour's centre: the dovetail at 1000 nodes, against
-    16000, 95th percentile of the edge error 0.67 -> 0.38 of a cell, largest 0.84 -> 0.47; the
-    random punch histories at 1024 nodes 95th percentile 4.0e-4 -> 3.4e-4 of the width; J1 and J2
-    unchanged). A stick run reaching the end cell ends at the
-    contact edge, unless (S1) says that edge slips (``slipping``, left and right): then the slip
-    zone is narrower than the end cell, and its edge c is where (x - E) m^2 (m = 1 - s q / (f cap),
-    E the contact edge) extrapolates to zero, as it does for the local Cattaneo solution. So too
-    when the end cell is the only slipping cell between the run and its contact edge (since
-    0.3.3): the traction margin's square, extrapolated from cells 1.5 and 2.5 cells in, stopped at
-    the end cell's centre there (a rounded punch under Q and sigma at 128 nodes: zones of 0.7 -
-    1.0 cell put at 0.5, 0.54 of a cell off; 0.22 so).
+    more than EDGE_PLACEMENT (SUBCELL_PLACEMENT at a contact edge, half a cell for a bracketed edge,
+    below; 0 otherwise).
 
-    Measured against J1 (Q = 0.001 .. 0.03 f P: slip zones of 0.1 to 8 cells at 128 / 1024
-    nodes): largest error 0.68 / 0.51 cells (Hertz) and 0.32 / 0.68 (punch) with the end cell
-    taken as the edge, 0.18 / 0.16 and 0.06 / 0.18 so; over Q = 0.02 .. 0.98 f P at 256 nodes the
-    traction margin's square instead of m^2 took the punch's largest error from 0.43 to 0.15 cells
-    (Hertz 0.19 -> 0.16)."""
+    Inside the contact the traction margin f cap - s q vanishes like the square root of the distance to
+    the edge, and where the lattice puts the edge for that is its own response, EDGE_RULE (since 0.3.7):
+    u(rho) cells outward of the outermost stick cell's centre, rho the ratio of its margin to its inner
+    neighbour's, from 0.17 of a cell inside that centre to 0.82 outside it. Until 0.3.7 the margin's
+    square was extrapolated linearly to its zero, which is the continuous form and not the lattice's:
+    0.17 - 0.20 of a cell off on J1 and J2 (now at most 0.024), 2.0e-4 / 2.6e-4 of the width at the 95th
+    percentile of the random histories at 1024 nodes (Hertz / punch; now 1.1e-4 / 2.1e-4 with this rule).
+    Where rho exceeds what a square-root margin gives on the lattice (EDGE_RULE_REACH), the margin does
+    not grow inwards like the square root (a band of cells within a small fraction of their bound, as
+    before a load maximum, or a margin an earlier slip left): the edge is then bracketed by the two
+    centres and put midway, at most half a cell from either (since 0.3.3; until then at the neighbour's
+    centre: the dovetail at 1000 nodes, against 16000, 95th percentile of the edge error 0.67 -> 0.38 of
+    a cell, largest 0.84 -> 0.47).
+
+    A stick run reaching the end cell ends at the contact edge, unless (S1) says that edge slips
+    (``slipping``, left and right): then the slip zone is narrower than the end cell, and its edge c is
+    where (x - E) m^2 (m = 1 - s q / (f cap), E the contact edge) extrapolates to zero, as it does for
+    the local Cattaneo solution. So too when the end cell is the only slipping cell between the run and
+    its contact edge (since 0.3.3; the traction margin's square stopped at the end cell's centre there).
+    That form's estimate is corrected by the lattice's response to it, END_RULE_WITHIN and END_RULE_END
+    (since 0.3.7: J1 at 256 nodes with the contact edge anywhere in its cell, largest error 0.085 / 0.055
+    of a cell against 0.20 before; the random Hertz histories at 1024 nodes 95th percentile 1.1e-4 ->
+    7.3e-5 of the width, the punch's 2.1e-4 -> 1.9e-4)."""
     out = []
     placement = 0.0
     for end, step, edge, open_ in ((i, 1, N.left, slipping[0]), (k, -1, N.right, slipping[1])):
@@ -1333,22 +1377,42 @@ def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
             lower = 0.0 if within else u0 - h
             m0, m1 = m0 * u0, m1 * (u0 + h)
             w = u0 - m0 * h / (m1 - m0) if m1 > m0 else lower
-            out.append(edge + step * min(max(w, lower), u0))
+            w = min(max(w, lower), u0)
+            # and the lattice's response to that form (END_RULE_*), at most EDGE_INSIDE inward of the cell's centre
+            w_est, u_e = w / h, u0 / h - (0.0 if within else 1.0)
+            w += h * float(np.polynomial.polynomial.polyval2d(w_est, u_e, _END_RULES[within]))
+            out.append(edge + step * min(max(w, 0.0, lower), u0 + EDGE_INSIDE * h))
             placement = max(placement, SUBCELL_PLACEMENT)
             continue
-        # the traction margin f cap - |q| vanishes like the square root of the distance to the stick edge
+        # the traction margin f cap - |q| vanishes like the square root of the distance to the stick edge,
+        # and the lattice's response to that is EDGE_RULE
         m0 *= qmax[end] ** 2
         m1 *= (qmax[inner] if 0 <= inner < x.size else qmax[end]) ** 2
-        frac = m0 / (m1 - m0) if m1 > m0 else 1.0
-        if frac >= 1.0:
+        rho = math.sqrt(m0 / m1) if m1 > 0.0 else math.inf
+        if rho <= EDGE_RULE_REACH:
+            frac = _edge_rule(min(rho, EDGE_RULE_RHO))
+        else:
             # the margin does not grow inwards as the square root would (an ill-conditioned band of cells
             # near their bound, or a margin left by an earlier slip): the edge lies between the two
             # centres, and their midpoint is at most half a cell from it
             frac = 0.5
             placement = max(placement, 0.5)
-        frac = max(frac, 0.0)
         out.append(x[end] - step * frac * h)
     return out[0], out[1], placement
+
+
+#: How far inside its outermost stick cell's centre a stick edge may lie, in cells: where EDGE_RULE puts it
+#: when that cell is about to slip (rho = 0).
+EDGE_INSIDE = -EDGE_RULE[-1]
+_END_RULES = {True: np.array(END_RULE_WITHIN), False: np.array(END_RULE_END)}
+
+
+def _edge_rule(rho: float) -> float:
+    """Where a stick edge lies outward of its outermost stick cell's centre, in cells (EDGE_RULE)."""
+    u = 0.0
+    for c in EDGE_RULE:
+        u = u * rho + c
+    return u
 
 
 def _slope_kinks(profile) -> tuple[np.ndarray, bool]:
