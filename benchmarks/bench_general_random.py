@@ -126,6 +126,10 @@ EVERY_STEP = 1e-3
 #: and the solver's is not; the other way round (the solver's own island, which its error estimate should
 #: cover); anything else.
 EXCEEDANCE = ("reference unsure", "reference edge island", "own edge island", "other")
+#: The edges the reference vouches for: its own error estimate (Richardson from N = 4000 and 8000) at most the
+#: issue's 1e-4 of the width. Where it is more, a comparison cannot show a 1e-4 agreement either way (22 of
+#: the punch's 448 edges, 16 of Hertz's); the 95th percentile is reported over all edges and over these.
+VOUCH = 1e-4
 
 
 def compare(run, ref, key):
@@ -136,7 +140,7 @@ def compare(run, ref, key):
     of the error)."""
     L, R = ref[key + "contact_left"], ref[key + "contact_right"]
     W = R - L
-    errs = []
+    errs, vouched = [], []
     classes = dict.fromkeys(EXCEEDANCE, 0)
     other, covered = 0.0, 0
     for side, edge in (("stick_left", L), ("stick_right", R)):
@@ -144,6 +148,7 @@ def compare(run, ref, key):
         ok = np.isfinite(a) & np.isfinite(b)
         e = np.abs(a - b) / W
         errs.append(e[ok])
+        vouched.append(e[ok & (ref[key + side + "_err"] <= VOUCH)])
         at_edge_run = np.abs(a - edge) <= 1e-9 * W
         at_edge_ref = np.abs(b - edge) <= 1e-9 * W
         for i in np.flatnonzero(ok & (e > EVERY_STEP)):
@@ -159,7 +164,7 @@ def compare(run, ref, key):
             if kind in ("own edge island", "other") and "error" in run and run["error"][i] >= e[i] / 3:
                 covered += 1
             classes[kind] += 1
-    errs = np.concatenate(errs)
+    errs, vouched = np.concatenate(errs), np.concatenate(vouched)
     mismatch = int(np.sum(np.isfinite(run["stick_left"]) != np.isfinite(ref[key + "stick_left"])))
     d_ref = float(ref[key + "dissipation_extrapolated"][-1])
     diss = abs(float(run["dissipation"][-1]) - d_ref) / d_ref
@@ -172,7 +177,7 @@ def compare(run, ref, key):
         diss_t = abs(float(run["dissipation"][-1]) - d_t) / d_t
     intervals = int(np.sum(run["intervals"] != ref[key + "intervals"]))
     failed = int(np.sum(~run["converged"].astype(bool)))
-    return errs, mismatch, (diss, diss_t), intervals, failed, (classes, other, covered)
+    return errs, vouched, mismatch, (diss, diss_t), intervals, failed, (classes, other, covered)
 
 
 def machine():
@@ -206,11 +211,12 @@ def main(argv=None):
     jobs = [("halfslip general", n) for n in args.nodes] + [("IC baseline", n) for n in args.baseline]
     for name, n in jobs:
         for g in args.geometries:
-            pooled, main, mism, diss, inter, failed, wall, steps, est = [], [], 0, [], 0, 0, 0.0, 0, []
+            pooled, sure, main, mism, diss, inter, failed, wall, steps, est = [], [], [], 0, [], 0, 0, 0.0, 0, []
             classes, other, covered = dict.fromkeys(EXCEEDANCE, 0), 0.0, 0
             for seed in range(args.seeds):
                 run = run_solver(g, seed, n, args.repeat) if name != "IC baseline" else run_baseline(g, seed, n)
-                e, m, d, i, f, (c, o, cov) = compare(run, ref, f"{g}_{seed}_")
+                e, v, m, d, i, f, (c, o, cov) = compare(run, ref, f"{g}_{seed}_")
+                sure.append(v)
                 classes = {k: classes[k] + c[k] for k in classes}
                 other, covered = max(other, o), covered + cov
                 pooled.append(e)
@@ -221,37 +227,41 @@ def main(argv=None):
                 steps += run["steps"]
                 if "error" in run:
                     est.append(run["error"][np.isfinite(run["error"])])
-            e, mn = np.concatenate(pooled), np.concatenate(main)
+            e, mn, sure = np.concatenate(pooled), np.concatenate(main), np.concatenate(sure)
             diss, diss_t = [d for d, _ in diss], [d for _, d in diss]
             estimate = np.percentile(np.concatenate(est), 95) if est else math.nan
             rows.append((name, n, g, np.median(e), np.percentile(e, 95), e.max(), np.percentile(mn, 95), mn.max(),
                          (max(diss), float(np.nanmax(diss_t)) if np.any(np.isfinite(diss_t)) else math.nan), mism, inter, failed, 1e3 * wall / steps, estimate, classes, other,
-                         covered if name != "IC baseline" else None))
+                         covered if name != "IC baseline" else None, np.percentile(sure, 95), e.size - sure.size))
             print(_fmt(rows[-1]), flush=True)
     if not args.no_doc:
         write_doc(rows, args, " ".join(sys.argv[1:]))
 
 
 def _fmt(r):
-    return (f"| {r[0]} | {r[1]} | {r[2]} | {r[3]:.1e} | {r[4]:.1e} | {r[5]:.1e} | {r[6]:.1e} | {r[7]:.1e} | "
+    return (f"| {r[0]} | {r[1]} | {r[2]} | {r[3]:.1e} | {r[4]:.1e} | {r[17]:.1e} ({r[18]}) | {r[5]:.1e} | {r[6]:.1e} | "
+            f"{r[7]:.1e} | "
             f"{100 * r[8][0]:.2f} % / {100 * r[8][1]:.2f} % | {r[9]} | {r[10]} | {r[11]} | {r[12]:.1f} | "
             f"{'' if math.isnan(r[13]) else f'{r[13]:.1e}'} | {' / '.join(str(v) for v in r[14].values())} | "
             f"{r[15]:.1e} | {'' if r[16] is None else r[16]} |")
 
 
 def write_doc(rows, args, argv):
-    head = ("| solver | nodes / N | geometry | outermost stick edges: median | 95th pct | max | "
+    head = ("| solver | nodes / N | geometry | outermost stick edges: median | 95th pct | 95th pct where the reference "
+            f"vouches (its own estimate <= {VOUCH:g}; edges left out) | max | "
             "widest stick interval: 95th pct | max | final dissipation error: against the extrapolated reference / "
             f"against N = {TIME_N} with {TIME_SPLIT} sub-steps per step | stick/no-stick mismatches | "
             "interval-count mismatches | failed steps | ms / step | error estimate 95th pct | "
             f"steps above {EVERY_STEP:g}: {' / '.join(EXCEEDANCE)} | max of the other steps | own edge islands and other "
             "steps the error estimate covers (at least a third of the error) |\n"
-            "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+            "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     text = (f"{BEGIN}\nMeasured with `python benchmarks/bench_general_random.py {argv}` on {time.strftime('%Y-%m-%d')}; "
             f"machine: {machine()}. Seeds 0..{args.seeds - 1} per geometry (112 steps each); errors against "
             f"benchmarks/reference/random_reference.npz (edges relative to the contact width; dissipation "
             f"against the reference's Richardson value, and against its run at N = {TIME_N} with every step cut into "
-            f"{TIME_SPLIT} sub-steps, benchmarks/reference/runs/*_{TIME_N}_t{TIME_SPLIT}.npz). Steps whose outermost stick edge is off by more than "
+            f"{TIME_SPLIT} sub-steps, benchmarks/reference/runs/*_{TIME_N}_t{TIME_SPLIT}.npz). The 95th percentile is given "
+            f"over all edges and over those the reference vouches for: its own error estimate (Richardson from N = 4000 "
+            f"and 8000) at most {VOUCH:g} of the width (bench_general_random.VOUCH). Steps whose outermost stick edge is off by more than "
             f"{EVERY_STEP:g} of the width are sorted into classes (bench_general_random.EXCEEDANCE): the reference's "
             f"own error estimate is at least a third of that; the reference's outermost stick point is an island at "
             f"the contact edge and the solver's is not; the other way round; other.\n\n{head}\n" + "\n".join(_fmt(r) for r in rows) + f"\n{END}")
