@@ -890,7 +890,7 @@ def test_an_edge_whose_margin_does_not_grow_is_put_between_the_cells():
     """_run_edges: a stick run's edge comes from the ratio rho of the traction margins f cap - abs(q) of its
     two outermost cells, through the lattice's response to a square-root edge (EDGE_RULE: u(rho) cells
     outward of the outermost stick cell's centre, since 0.3.7); where rho exceeds what a square-root margin
-    gives (EDGE_RULE_RHO: the margin does not grow inwards, as in a band of cells just under their bound
+    gives on the lattice (EDGE_RULE_REACH: the margin does not grow inwards, as in a band of cells just under their bound
     before a load maximum) the edge is put midway between the stick and the slip cell's centres and
     reported as placed to half a cell (since 0.3.3; it went to the slip cell's centre, up to 0.84 of a cell
     from the converged edge on the dovetail at 1000 nodes, 0.47 since). Cells of width 1, the run 3..12 of
