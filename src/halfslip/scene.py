@@ -55,7 +55,8 @@ _REQUIRED_KEYS = ("material", "friction", "geometry", "loads")
 _SOLVER_KEYS = ("method", "tol", "nodes", "skip_steady_cycles", "edge_travel")
 
 #: The general solver's stick edges are within about this many cells (contact width / nodes) of the
-#: converged ones in the median (random histories, docs/general_solver.md): nodes = ceil(NODES_PER_TOL / tol).
+#: converged ones (random histories, docs/general_solver.md; the median until 0.3.6, the 95th percentile over
+#: the edges the reference vouches for since 0.3.7): nodes = ceil(NODES_PER_TOL / tol).
 NODES_PER_TOL = 0.1
 _OUTPUT_KEYS = ("fields", "every", "points")
 
