@@ -147,7 +147,9 @@ EPS = float(np.finfo(float).eps)
 #: partially slipping step. J1 and J2 on both profiles at 128 .. 1024 nodes (248 steps, 19 loads and 12
 #: unloadings per resolution): the edge error is 0.09 of a cell in the median, 0.13 at the 90th
 #: percentile, while the distance to the shadow lattice's edges fell to 0.003 of a cell (error / that
-#: distance up to 39); with this floor error / estimate is at most 1.7 there.
+#: distance up to 39); with this floor error / estimate is at most 1.7 there. Since 0.3.7 (EDGE_RULE) J1 and
+#: J2 are placed to a few hundredths of a cell, and the floor is set by the random histories: edges inside the
+#: contact 0.09 of a cell off at the 95th percentile at 1024 nodes.
 EDGE_PLACEMENT = 0.1
 #: How well a slip zone of at most about a cell is placed, in cells: the floor of the edge error estimate
 #: where (S1) says a contact edge slips but its end cell sticks, or where the end cell alone slips (both
