@@ -1557,7 +1557,7 @@ class _EndCell:
         """Points, pressure and weights of int dxi over the pieces between ``breaks`` (and the pressure at
         ``at`` last, when given)."""
         c, d = self.normal.center, self.normal.half_width
-        tb = np.arccos(np.clip((c - np.asarray(breaks, dtype=float)) / d, -1.0, 1.0))
+        tb = np.arccos(np.minimum(np.maximum((c - np.asarray(breaks, dtype=float)) / d, -1.0), 1.0))
         t0, t1 = tb[:-1, None], tb[1:, None]
         t = (t0 + (t1 - t0) * _EC_S[None, :]).ravel()
         xi = c - d * np.cos(t)
@@ -1589,7 +1589,7 @@ class _EndCell:
         the rest, (p(xi) - p(x)) ln|x - xi|, which vanishes at x like (xi - x) ln|xi - x|."""
         px *= self.scale
         rest = np.log(np.abs(x - xi)) * (p * self.scale - px) * dxi
-        return float(px * (_G(np.array([x - self.a]))[0] - _G(np.array([x - self.b]))[0]) + np.sum(rest))
+        return float(px * (_g(x - self.a) - _g(x - self.b)) + np.sum(rest))
 
 
 @numba.njit(cache=True)
