@@ -849,8 +849,9 @@ ESTIMATE_FACTOR = 3.0
 AFTER_SLIP_SPLIT_BUG = (
     "BUG (open, issue 14): Hertz, after a Cattaneo slip (P0, 0.7 f P0), the segment to (1.3 P0, "
     "0.2 f P0, 0.1 a P0, 2e7 Pa) taken as one step or split: the end states differ by more than the "
-    "tolerance: the outermost stick points by 1.7e-2 of the width (128 nodes, 10 equal steps; 1.4e-2 "
-    "for a first step of 1e-9 or 2e-9 or the graded splits; 0.3.4 - 0.3.5: 4.1e-2 for all, 3.4e-3 at "
+    "tolerance: the outermost stick points by 1.5e-2 of the width (128 nodes, 10 equal steps; 1.3e-2 "
+    "for a first step of 1e-9 or 2e-9 or the graded splits; 0.3.6: 1.7e-2 / 1.4e-2; 0.3.4 - 0.3.5: "
+    "4.1e-2 for all, 3.4e-3 at "
     "512 nodes, 100 steps; 0.3.3: 2.3e-2, 1.6e-10, 6.6e-3 and 1.1e-2). Islands of one cell at the advancing edge come and go with the "
     "split, and the main stick zone's edge moves by about a cell: the time discretisation of a "
     "slipping step whose contact moves (docs/general_solver.md, limits)")
@@ -902,7 +903,12 @@ def test_step_splitting_after_slip(kind, nodes, steps):
     (estimate 3.1e-2: the single step's end has one stick zone, to 0.946 of the width, the split
     one islands out to 0.987; 2048 nodes put the edge at 0.957 either way) and 3.4e-3 at 512
     (estimate 3.7e-2); with the end cells shaped like the pressure (0.3.6) 1.7e-2 at 128 nodes
-    (estimate 3.0e-2).
+    (estimate 3.0e-2); with the edges placed by the lattice's own response (0.3.7) 1.5e-2
+    (estimate 3.1e-2). Where it comes from (0.3.7, 128 nodes): the right edge advances and (S1)
+    says it sticks while a slip band opens 2-3 cells inside it, so the arrived cells stick as a
+    one-cell island until the last tenth of the segment, when it goes: 10 equal steps end at
+    0.9687 of the width, one step at 0.9534, 40 steps at 0.9573; at 2048 nodes all three are
+    0.957 - 0.958.
     """
     difference, said = after_slip_split(kind, nodes, list(np.arange(1, steps + 1) / steps))
     if kind == "punch":
@@ -928,8 +934,8 @@ def test_tiny_steps_after_slip(kind, split):
     step (TINY_AFTER_SLIP_TOL).
 
     Hertz does not meet it, as test_step_splitting_after_slip (open defect, recorded outcome):
-    outermost stick points 1.4e-2 of the width apart at 128 nodes for every split (0.3.6,
-    estimates 2.7e-2 .. 3.4e-2; 4.1e-2 in 0.3.4 - 0.3.5; 0.3.3, one cell of arrival per sub-step: 1.6e-10 / 3.1e-10 for tiny_first and
+    outermost stick points 1.3e-2 of the width apart at 128 nodes for every split (0.3.7,
+    estimates 2.5e-2 .. 3.4e-2; 1.4e-2 in 0.3.6; 4.1e-2 in 0.3.4 - 0.3.5; 0.3.3, one cell of arrival per sub-step: 1.6e-10 / 3.1e-10 for tiny_first and
     tiny_2e-9, 6.6e-3 graded). The single step from the slipped state is cut into more
     sub-steps than the rest of the split one: its stick edge is taken to travel from the old
     stick edge (15 sub-steps), while a first tiny step reverses the slip, sticks the whole
