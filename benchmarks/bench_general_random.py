@@ -132,19 +132,23 @@ EXCEEDANCE = ("reference unsure", "reference edge island", "own edge island", "o
 VOUCH = 1e-4
 
 
-def reference_error(ref, key, side):
-    """The reference's own error at each step's stick edge ``side``, relative to the width: the larger of its
-    convergence in space (Richardson from N = 4000 and 8000, stored with it) and in time (its run at N = TIME_N
-    with every step cut into TIME_SPLIT sub-steps against the same N in one increment: the reference takes
-    each step as one increment, and where its stick edge moves far within a step that is off by up to half a
-    1024-node cell, seed 1 of the punch)."""
+def reference_error(ref, key):
+    """{side: the reference's own error at each step's stick edge}, relative to the width, for "stick_left"
+    and "stick_right": the larger of its convergence in space (Richardson from N = 4000 and 8000, stored with
+    it) and in time (its run at N = TIME_N with every step cut into TIME_SPLIT sub-steps against the same N in
+    one increment: the reference takes each step as one increment, and where its stick edge moves far within
+    a step that is off by up to half a 1024-node cell, seed 1 of the punch)."""
     W = ref[key + "contact_right"] - ref[key + "contact_left"]
-    error = np.array(ref[key + side + "_err"], dtype=float)
     timed, single = RUNS / f"{key}{TIME_N}_t{TIME_SPLIT}.npz", RUNS / f"{key}{TIME_N}.npz"
-    if timed.exists() and single.exists():
-        apart = np.abs(np.load(timed)[side] - np.load(single)[side]) / W
-        error = np.maximum(error, np.where(np.isfinite(apart), apart, np.inf))
-    return error
+    runs = (np.load(timed), np.load(single)) if timed.exists() and single.exists() else None
+    out = {}
+    for side in ("stick_left", "stick_right"):
+        error = np.array(ref[key + side + "_err"], dtype=float)
+        if runs is not None:
+            apart = np.abs(runs[0][side] - runs[1][side]) / W
+            error = np.maximum(error, np.where(np.isfinite(apart), apart, np.inf))
+        out[side] = error
+    return out
 
 
 def compare(run, ref, key):
@@ -157,7 +161,7 @@ def compare(run, ref, key):
     W = R - L
     errs, vouched = [], []
     classes = dict.fromkeys(EXCEEDANCE, 0)
-    sure = {side: reference_error(ref, key, side) for side in ("stick_left", "stick_right")}
+    sure = reference_error(ref, key)
     other, covered = 0.0, 0
     for side, edge in (("stick_left", L), ("stick_right", R)):
         a, b = run[side], ref[key + side]

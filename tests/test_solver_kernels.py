@@ -454,7 +454,7 @@ def test_end_cell_lattice_solves_and_products_are_the_dense_ones():
     lat = solver._lattice(h, n)
     ends = G._end_supports(N, first, n, h)
     C = solver._end_columns(N, first, h, ends, x)
-    W = G._EndCellLattice(lat, n, ends, C, N, first)
+    W = G._EndCellLattice(lat, ends, C, N)
     T = lat.t[np.abs(np.arange(n)[:, None] - np.arange(n)[None, :])]
     Tp = T.copy()
     Tp[:, 0] += C[:, 0]

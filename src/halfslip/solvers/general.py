@@ -603,7 +603,7 @@ class GeneralSolver(TangentialSolver):
         # the end cells carry their shear like the pressure over their supports, which reach to the contact's
         # edges (as their loads cap do)
         ends = _end_supports(N1, first, n, h)
-        lat = _EndCellLattice(lat, n, ends, self._end_columns(N1, first, h, ends, x), N1, first)
+        lat = _EndCellLattice(lat, ends, self._end_columns(N1, first, h, ends, x), N1)
         # what each cell carries into the step
         old = mem.normal is not None
         status = np.zeros(n, np.int8)
@@ -1383,7 +1383,7 @@ def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
             # and the lattice's response to that form (END_RULE_*), at most EDGE_INSIDE inward of the cell's centre
             w_est, u_e = w / h, u0 / h - (0.0 if within else 1.0)
             w += h * float(np.polynomial.polynomial.polyval2d(w_est, u_e, _END_RULES[within]))
-            out.append(edge + step * min(max(w, 0.0, lower), u0 + EDGE_INSIDE * h))
+            out.append(edge + step * min(max(w, lower), u0 + EDGE_INSIDE * h))
             placement = max(placement, SUBCELL_PLACEMENT)
             continue
         # the traction margin f cap - |q| vanishes like the square root of the distance to the stick edge,
@@ -1655,12 +1655,13 @@ class _EndCellLattice:
     correction columns as more right-hand sides of the lattice's own solve. Used as the ToeplitzLattice of
     the take by the active set, the gross-sliding branch and the arrivals' fit."""
 
-    def __init__(self, lat: ToeplitzLattice, n: int, ends: list, columns: np.ndarray, normal, first: int):
-        self.lat, self.n, self.ends = lat, n, ends
-        self.t, self.datum, self.h = lat.t, lat.datum, lat.h  # t: the projected gradient's bound
+    def __init__(self, lat: ToeplitzLattice, ends: list, columns: np.ndarray, normal):
+        self.lat = lat
+        # as the ToeplitzLattice it stands in for: t (the projected gradient's bound), datum (the shift's), h
+        self.t, self.datum, self.h = lat.t, lat.datum, lat.h
         self.idx = np.array([k for k, _, _ in ends], np.int64)
         self.C = columns
-        self.normal, self.first = normal, first
+        self.normal = normal  # the take's contact, whose end cells these are (the arrivals' fit asks)
         self._woodbury: dict[tuple, tuple] = {}
 
     def matvec(self, v: np.ndarray) -> np.ndarray:
