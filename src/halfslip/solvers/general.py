@@ -112,8 +112,13 @@ _EC_S, _EC_DS = _EC_T ** 3 * (10.0 - 15.0 * _EC_T + 6.0 * _EC_T ** 2), 30.0 * _E
 #: like 1/END_CELL_NEAR^k: 8^-20 / 20 < 1e-19, below rounding) instead of the quadrature at every point.
 END_CELL_NEAR = 8
 END_CELL_TERMS = 20
-#: End cells kept (a step's fine and shadow lattices, their re-takes and the next step's start: a few).
-END_CELLS_KEPT = 16
+#: End cells and cell-load tables kept, per contact (NormalSolution) and spacing. A step asks for those of its
+#: fine and shadow lattices, their re-takes and the next step's start; a periodic history asks for the same
+#: contacts again every cycle (the simulator keeps the normal solutions of its samples, simulator.contact_edges),
+#: so that what depends on the contact alone is found once per phase rather than once per step (the dovetail:
+#: 100 steps a cycle, 4 end cells and 2 tables a step, about 2 kB and 8 kB each at 1000 nodes).
+END_CELLS_KEPT = 512
+LOADS_KEPT = 256
 #: Active-set iterations before the projected-gradient restart.
 MAX_ACTIVE_SET = 100
 #: The active set changes a cell only for a violation above this, relative to f max p (Coulomb) and to the
@@ -371,6 +376,9 @@ class GeneralSolver(TangentialSolver):
         self._lattices: dict[float, ToeplitzLattice] = {}
         self._kinks, self._graded_kinks = _slope_kinks(problem.profile)
         self._end_cells: dict[tuple, _EndCell] = {}
+        self._loads: dict[tuple, _Load] = {}
+        self._columns: dict[tuple, tuple] = {}
+        self._paths: dict[tuple, tuple] = {}
         self.counters = dict.fromkeys(("steps", "substeps", "iterations", "cg_iterations", "restarts",
                                        "normal_solves"), 0)
 
@@ -500,7 +508,11 @@ class GeneralSolver(TangentialSolver):
         if not math.isfinite(h):
             h = (self.width if self.width is not None else N1.right - N1.left) / self.nodes
         path = self._path(mem.normal, N1, loads0, loads1)
-        load = _Load(N1, h, self._kinks, graded=self._graded_kinks)
+        load = self._loads.get((id(N1), h))
+        if load is None or load.N is not N1:
+            load = self._loads[(id(N1), h)] = _Load(N1, h, self._kinks, graded=self._graded_kinks)
+            if len(self._loads) > LOADS_KEPT:
+                del self._loads[next(iter(self._loads))]
         ctx = _Context(N1, h, path, load, normal_changed)
         return ctx, self._take(mem, h, loads0, loads1, N1, path, load, hint)
 
@@ -510,8 +522,15 @@ class GeneralSolver(TangentialSolver):
             return None
         if N0 is not None and N1.left >= N0.left and N1.right <= N0.right:
             return None
+        key = (loads0, loads1, id(N0), id(N1))
+        got = self._paths.get(key)
+        if got is not None and got[0] is N0 and got[1] is N1:
+            return got[2]
         path = EdgePath(self.problem, N0, N1, loads0, loads1)
         self.counters["normal_solves"] += path.solves
+        self._paths[key] = (N0, N1, path)
+        if len(self._paths) > LOADS_KEPT:
+            del self._paths[next(iter(self._paths))]
         return path
 
     def _finish(self, state: ContactState, t1: float, loads1: Loads, ctx: "_Context", fine: "_Outcome",
@@ -603,7 +622,7 @@ class GeneralSolver(TangentialSolver):
         # the end cells carry their shear like the pressure over their supports, which reach to the contact's
         # edges (as their loads cap do)
         ends = _end_supports(N1, first, n, h)
-        lat = _EndCellLattice(lat, ends, self._end_columns(N1, first, h, ends, x), N1)
+        lat = _EndCellLattice(lat, ends, self._take_columns(N1, first, n, h, ends, x), N1)
         # what each cell carries into the step
         old = mem.normal is not None
         status = np.zeros(n, np.int8)
@@ -932,6 +951,19 @@ class GeneralSolver(TangentialSolver):
                     del self._end_cells[next(iter(self._end_cells))]
             out[:, c] = -(self.A / math.pi) * cell.potential(xs)
         return out
+
+    def _take_columns(self, normal, first, n, h, ends, x) -> np.ndarray:
+        """:meth:`_end_columns` at a take's own cell centres ``x`` (read only), kept per contact and cells
+        (END_CELLS_KEPT): the fine and shadow takes of a periodic history's phase recur every cycle."""
+        key = (id(normal), first, n, h)
+        got = self._columns.get(key)
+        if got is None or got[0] is not normal:
+            columns = self._end_columns(normal, first, h, ends, x)
+            columns.flags.writeable = False
+            got = self._columns[key] = (normal, columns)
+            if len(self._columns) > LOADS_KEPT:
+                del self._columns[next(iter(self._columns))]
+        return got[1]
 
     def _products(self, xs, xc, spacing, q) -> np.ndarray:
         """sum_j t(xs_i - xc_j) q_j in the package datum, ``q`` of shape (n,) or (n, k).
