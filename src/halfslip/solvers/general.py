@@ -710,12 +710,13 @@ class GeneralSolver(TangentialSolver):
         memory = GeneralMemory(N1, h, first, _frozen(status), _frozen(q), _frozen(g), _frozen(G), _frozen(cap),
                                shift)
         slipping = _slipping_edges(N1, loads0, loads1, f) if mem.normal is not None else (False, False)
+        drives = tuple((u / f, v) for u, v in _edge_drives(N1, loads0, loads1)) if any(slipping) else None
         placement = 0.0
         if not np.any(slip):
             regime, edges = Regime.STICK, (N1.left, N1.right)
             if any(slipping):
                 # (S1): an edge slips, over less than its end cell (which sticks)
-                *edges, placement = _run_edges(x, q, qmax, status, N1, h, 0, n - 1, slipping)
+                *edges, placement = _run_edges(x, q, qmax, status, N1, h, 0, n - 1, slipping, drives)
                 edges = tuple(edges)
                 if edges != (N1.left, N1.right):
                     regime = Regime.PARTIAL_SLIP
@@ -726,13 +727,14 @@ class GeneralSolver(TangentialSolver):
         else:
             runs = _runs(stick)
             regime = Regime.PARTIAL_SLIP
-            *edges, placement = _run_edges(x, q, qmax, status, N1, h, runs[0][0], runs[-1][1] - 1, slipping)
+            *edges, placement = _run_edges(x, q, qmax, status, N1, h, runs[0][0], runs[-1][1] - 1, slipping,
+                                          drives)
             edges = tuple(edges)
             a, b = max(runs, key=lambda r: r[1] - r[0])
             if len(runs) == 1:
                 widest = edges
             else:  # the estimate covers the widest interval too (its spread over sub-steps, _finish)
-                *widest, inner = _run_edges(x, q, qmax, status, N1, h, a, b - 1, slipping)
+                *widest, inner = _run_edges(x, q, qmax, status, N1, h, a, b - 1, slipping, drives)
                 widest, placement = tuple(widest), max(placement, inner)
         return _Outcome(memory, shift, dissipation, edges, widest, regime, bool(np.any(slip)), iterations, residual,
                         message, slipping, placement)
@@ -1354,7 +1356,7 @@ def _check(q, qmax, s, status, force, Q, fP, qscale, gscale, floor=0.0) -> float
 
 
 def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
-               slipping=(False, False)) -> tuple[float, float, float]:
+               slipping=(False, False), drives=None) -> tuple[float, float, float]:
     """Edges of the stick run of cells i..k (the outermost stick points for the first and last stuck
     cells), within the cell, and how far either may be from where it is put, in cells, where that is
     more than EDGE_PLACEMENT (SUBCELL_PLACEMENT at a contact edge, half a cell for a bracketed edge,
@@ -1385,14 +1387,22 @@ def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
     7.3e-5 of the width, the punch's 2.1e-4 -> 1.9e-4)."""
     out = []
     placement = 0.0
-    for end, step, edge, open_ in ((i, 1, N.left, slipping[0]), (k, -1, N.right, slipping[1])):
+    for side, (end, step, edge, open_) in enumerate(((i, 1, N.left, slipping[0]), (k, -1, N.right, slipping[1]))):
         nb = end - step
         within = nb < 0 or nb >= x.size  # the run reaches the end cell
         if within:
             if not open_:
                 out.append(edge)
                 continue
-            sgn = 1 if q[end] >= 0.0 else -1
+            if drives is not None:
+                # the slip at the edge goes the way of the stuck increment's singular term there, u - chi f v
+                # with chi = q / (f p) at the edge (the end cell's): at an advancing edge that slips (abs(u) >=
+                # f v) the sign of u, at a receding one not necessarily that of q (unloading from a
+                # proportional state q = chi f p with dQ / dP above chi f slips backwards)
+                u, v = drives[side]
+                sgn = 1 if u - (q[end] / qmax[end] if qmax[end] > 0.0 else 0.0) * v >= 0.0 else -1
+            else:
+                sgn = 1 if q[end] >= 0.0 else -1
         else:
             sgn = int(status[nb])
         m0 = 1.0 - sgn * q[end] / qmax[end] if qmax[end] > 0 else 0.0
@@ -1496,18 +1506,20 @@ def _unresolved_reach(slipping: tuple, status: np.ndarray, h: float) -> float:
     return reach
 
 
-def _slipping_edges(N1: NormalSolution, loads0: Loads, loads1: Loads, f: float) -> tuple[bool, bool]:
-    """Whether (S1) says the left / right contact edge slips over the step (see :func:`_unresolved_reach`)."""
+def _edge_drives(N1: NormalSolution, loads0: Loads, loads1: Loads) -> tuple[tuple[float, float], ...]:
+    """(u, v) of (S1) at the left and right contact edges over the step: the tangential and normal increments
+    that drive each edge, u = dQ -+ (pi/4) d dsigma and v = dP -+ 2 dM0 / d (v > 0: the edge advances)."""
     d, x0 = N1.half_width, N1.center
     dP, dQ = loads1.P - loads0.P, loads1.Q - loads0.Q
     dM0 = (loads1.M - loads0.M) - dP * x0
     dS = loads1.sigma - loads0.sigma
+    return tuple((dQ + side * 0.25 * math.pi * d * dS, dP + side * 2.0 * dM0 / d) for side in (-1, 1))
+
+
+def _slipping_edges(N1: NormalSolution, loads0: Loads, loads1: Loads, f: float) -> tuple[bool, bool]:
+    """Whether (S1) says the left / right contact edge slips over the step (see :func:`_unresolved_reach`)."""
     drive = 1e-12 * f * max(abs(loads0.P), abs(loads1.P))
-    out = []
-    for side in (-1, 1):
-        u = dQ + side * 0.25 * math.pi * d * dS
-        v = dP + side * 2.0 * dM0 / d
-        out.append(bool(abs(u) >= f * v if v > 0.0 else abs(u) > drive))
+    out = [bool(abs(u) >= f * v if v > 0.0 else abs(u) > drive) for u, v in _edge_drives(N1, loads0, loads1)]
     return out[0], out[1]
 
 
