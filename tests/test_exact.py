@@ -77,6 +77,31 @@ def test_mindlin_unloading_and_reloading(kind):
     assert rel_err(q_back, q_loaded) < 1e-10
 
 
+@pytest.mark.parametrize("kind", PROFILES)
+@pytest.mark.parametrize("k_unload", [0.3, 0.45, 0.52, 0.7])
+def test_receding_contact_after_proportional_loading(kind, k_unload):
+    """J3: loaded in proportion to (P0, k f P0) (full stick, q = k f p), then unloaded along dQ = k' f dP:
+    the levels above P_c are set to -+f, q = k f p(P) -+ (1 +- k) f [p(P) - p(P_c)] with P - P_c =
+    abs(k' - k) (P0 - P) / (1 +- k) (backwards for k' > k), the stick zone that of P_c (to rounding)."""
+    problem, method = make(kind)
+    k = 0.5
+    state = march(method, [(P, k * F * P) for P in np.linspace(0.05, 1.0, 20) * P0])[-1]
+    back = k_unload > k
+    for P in (0.95 * P0, 0.8 * P0, 0.6 * P0):
+        state = march(method, [(P, k * F * P0 + k_unload * F * (P - P0))], state)[-1]
+        Pc = P - abs(k_unload - k) * (P0 - P) / (1 + k if back else 1 - k)
+        c = problem.half_width(Pc)
+        assert state.stick_right == pytest.approx(c, rel=1e-10)
+        assert state.stick_left == pytest.approx(-c, rel=1e-10)
+        a = problem.half_width(P)
+        x = np.linspace(-a, a, 801)
+        _, q = method.tractions(state.memory, x)
+        sign = -1.0 if back else 1.0
+        q_closed = k * F * problem.pressure(x, P) + sign * (1 - sign * k) * F * (
+            problem.pressure(x, P) - problem.pressure(x, Pc))
+        assert rel_err(q, q_closed) < 1e-10
+
+
 def motor_loop(P_mean, P_amp, Q_mean, Q_amp, phase_deg, n):
     theta = 2 * np.pi * np.arange(1, n + 1) / n
     P = P_mean + P_amp * np.sin(theta)
