@@ -160,10 +160,11 @@ EDGE_PLACEMENT = 0.1
 #: where (S1) says a contact edge slips but its end cell sticks, or where the end cell alone slips (both
 #: placed by the local Cattaneo form, which reports it, _run_edges; the shadow lattice places them the same way, so the two
 #: lattices' distance says nothing there). Measured: J1 at Q = 0.001 .. 0.06 f P (60 loads, 128 / 256 /
-#: 1024 nodes, both profiles) at most 0.18 of a cell; but the dovetail (examples/dovetail.yaml, last
-#: cycle, against 16000 nodes) after its load maximum, where P falls and the edges recede while slipping
-#: and the lattice sees no slipping cell, 0.23 .. 0.48 of a cell at 1000 nodes (0.36 at 2000): the local
-#: form is not that of a receding edge. Until 0.3.3 such steps were raised to a whole cell.
+#: 1024 nodes, both profiles) at most 0.18 of a cell (0.085 with END_RULE_*, 0.3.7); J3 (receding edges,
+#: 512 nodes) 0.031; the dovetail (examples/dovetail.yaml, last cycle, 1000 nodes, against 16000) 0.21 at
+#: most, where 4000 - 16000 nodes disagree among themselves by 0.5 um (0.23 .. 0.48 until 0.3.7, which read
+#: the margins of receding edges against the wrong bound, _run_edges). Until 0.3.3 such steps were raised
+#: to a whole cell.
 SUBCELL_PLACEMENT = 0.5
 #: The lattice's own response to a square-root stick edge (benchmarks/calibrate_edge_rule.py): with rho =
 #: m_k / m_(k-1) the traction margins f cap - s q of the outermost stick cell k and its inner neighbour,
@@ -1379,7 +1380,10 @@ def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
     A stick run reaching the end cell ends at the contact edge, unless (S1) says that edge slips
     (``slipping``, left and right): then the slip zone is narrower than the end cell, and its edge c is
     where (x - E) m^2 (m = 1 - s q / (f cap), E the contact edge) extrapolates to zero, as it does for
-    the local Cattaneo solution. So too when the end cell is the only slipping cell between the run and
+    the local Cattaneo solution. s is the way the edge slips: that of the stuck increment's singular term
+    there, u - chi v with ``drives`` = (u / f, v) of (S1) at each edge and chi = q / (f cap) of the end
+    cell (since 0.3.8; until then the sign of q there, which a receding edge need not slip with: J3, the
+    punch at 512 nodes 0.35 of a cell off, now 0.031). So too when the end cell is the only slipping cell between the run and
     its contact edge (since 0.3.3; the traction margin's square stopped at the end cell's centre there).
     That form's estimate is corrected by the lattice's response to it, END_RULE_WITHIN and END_RULE_END
     (since 0.3.7: J1 at 256 nodes with the contact edge anywhere in its cell, largest error 0.085 / 0.055
