@@ -894,7 +894,7 @@ def test_an_edge_whose_margin_does_not_grow_is_put_between_the_cells():
     before a load maximum) the edge is put midway between the stick and the slip cell's centres and
     reported as placed to half a cell (since 0.3.3; it went to the slip cell's centre, up to 0.84 of a cell
     from the converged edge on the dovetail at 1000 nodes, 0.47 since). Cells of width 1, the run 3..12 of
-    16, cells 0..2 and 13..15 slipping forwards (q = cap)."""
+    16, cells 0..2 and 13..15 slipping forwards (q = cap), the inner cells 5..10 unloaded (margin 2)."""
     problem = NormalProblem(helpers.PROFILES["hertz"], A)
     N = problem.solve(P0)
     x = np.arange(16) + 0.5
@@ -902,6 +902,7 @@ def test_an_edge_whose_margin_does_not_grow_is_put_between_the_cells():
     status = np.zeros(16, np.int8)
     status[:3] = status[13:] = 1
     q = cap.copy()
+    q[5:11] = 0.0
     # margins 0.03 / 0.1 on the left (rho = 0.3, the edge 0.17 cells outside cell 3's centre), 0.6 / 1 on the
     # right (rho = 0.6, 0.63 cells outside cell 12's)
     for j, margin in ((3, 0.03), (4, 0.1), (12, 0.6), (11, 1.0)):
@@ -922,6 +923,13 @@ def test_an_edge_whose_margin_does_not_grow_is_put_between_the_cells():
     _, right, placement = general_module._run_edges(x, q, cap, status, N, 1.0, 3, 12)
     assert right == pytest.approx(x[12] + general_module._edge_rule(general_module.EDGE_RULE_RHO), abs=1e-12)
     assert right == pytest.approx(x[12] + 0.8232, abs=1e-4) and placement == 0.0
+    # a margin that falls again in the third cell in (0.05 in cell 5 against 0.1 in cell 4; since 0.3.8): the
+    # rule still places the edge, but it read a square root that the next cell does not continue (a margin an
+    # earlier slip left, as on the dovetail early in each loading half), so it is placed to half a cell only
+    q[3], q[5] = cap[3] - 0.03, cap[5] - 0.05
+    left, _, placement = general_module._run_edges(x, q, cap, status, N, 1.0, 3, 12)
+    assert left == pytest.approx(x[3] - general_module._edge_rule(0.3), abs=1e-12) and placement == 0.5
+    q[5] = 0.0
     # a flat margin on the right (the same in cells 11 and 12): bracketed, midway between 12 and 13, to half a cell
     q[11] = q[12] = cap[12] - 1e-3
     left, right, placement = general_module._run_edges(x, q, cap, status, N, 1.0, 3, 12)

@@ -1375,7 +1375,10 @@ def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
     before a load maximum, or a margin an earlier slip left): the edge is then bracketed by the two
     centres and put midway, at most half a cell from either (since 0.3.3; until then at the neighbour's
     centre: the dovetail at 1000 nodes, against 16000, 95th percentile of the edge error 0.67 -> 0.38 of
-    a cell, largest 0.84 -> 0.47).
+    a cell, largest 0.84 -> 0.47). Where the rule applies but the third cell in has less margin than the
+    second (within the run's near half), the square root it read does not go on: the edge stays where the
+    rule puts it, placed to half a cell (since 0.3.8; the dovetail early in each loading half, 0.28 of a
+    cell off against the 0.1-cell floor).
 
     A stick run reaching the end cell ends at the contact edge, unless (S1) says that edge slips
     (``slipping``, left and right): then the slip zone is narrower than the end cell, and its edge c is
@@ -1439,6 +1442,14 @@ def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
         rho = math.sqrt(m0 / m1) if m1 > 0.0 else math.inf
         if rho <= EDGE_RULE_REACH:
             frac = _edge_rule(min(rho, EDGE_RULE_RHO))
+            # the rule reads a square root off two cells; the next cell in must continue it. A margin that
+            # falls again there was left by an earlier slip (the dovetail early in each loading half: the
+            # slip zone grows into cells the last half-cycle left near their other bound), and the rule's
+            # place is then as uncertain as a bracketed one
+            far = inner + step
+            if 2 * abs(far - end) <= k - i and status[far] == 0 and qmax[far] > 0:  # (the run's near half)
+                if (max(1.0 - sgn * q[far] / qmax[far], 0.0) * qmax[far]) ** 2 < m1:
+                    placement = max(placement, 0.5)
         else:
             # the margin does not grow inwards as the square root would (an ill-conditioned band of cells
             # near their bound, or a margin left by an earlier slip): the edge lies between the two
