@@ -119,6 +119,9 @@ END_CELL_TERMS = 20
 #: 100 steps a cycle, 4 end cells and 2 tables a step, about 2 kB and 8 kB each at 1000 nodes).
 END_CELLS_KEPT = 512
 LOADS_KEPT = 256
+#: Bytes of Woodbury columns (T_SS^-1 of the end cells' columns, _EndCellLattice) kept across takes: a stick set
+#: recurs with its contact every cycle (the dovetail: about 250 a cycle, 16 kB each at 1000 nodes).
+WOODBURY_BYTES = 64 * 2 ** 20
 #: Active-set iterations before the projected-gradient restart.
 MAX_ACTIVE_SET = 100
 #: The active set changes a cell only for a violation above this, relative to f max p (Coulomb) and to the
@@ -380,6 +383,7 @@ class GeneralSolver(TangentialSolver):
         self._loads: dict[tuple, _Load] = {}
         self._columns: dict[tuple, tuple] = {}
         self._paths: dict[tuple, tuple] = {}
+        self._woodbury = _Kept(WOODBURY_BYTES)
         self.counters = dict.fromkeys(("steps", "substeps", "iterations", "cg_iterations", "restarts",
                                        "normal_solves"), 0)
 
@@ -623,7 +627,8 @@ class GeneralSolver(TangentialSolver):
         # the end cells carry their shear like the pressure over their supports, which reach to the contact's
         # edges (as their loads cap do)
         ends = _end_supports(N1, first, n, h)
-        lat = _EndCellLattice(lat, ends, self._take_columns(N1, first, n, h, ends, x), N1)
+        lat = _EndCellLattice(lat, ends, self._take_columns(N1, first, n, h, ends, x), N1, self._woodbury,
+                              (first, n, h, lat.datum))
         # what each cell carries into the step
         old = mem.normal is not None
         status = np.zeros(n, np.int8)
@@ -1707,6 +1712,29 @@ def _g(v):  # pragma: no cover - compiled
     return v * math.log(abs(v)) - v if v != 0.0 else 0.0
 
 
+class _Kept:
+    """What a contact's takes find again, per key and contact (the NormalSolution, checked by identity: a key
+    holds id(normal)'s cells only), up to ``budget`` bytes; the oldest go first. Budget 0: kept for as long as
+    the object lives (one take)."""
+
+    def __init__(self, budget: int):
+        self.budget, self.size = budget, 0
+        self._items: dict[tuple, tuple] = {}
+
+    def get(self, key, normal):
+        got = self._items.get((id(normal), key))
+        return got[1] if got is not None and got[0] is normal else None
+
+    def put(self, key, normal, value, nbytes: int) -> None:
+        old = self._items.pop((id(normal), key), None)
+        if old is not None:
+            self.size -= old[2]
+        self._items[(id(normal), key)] = (normal, value, nbytes)
+        self.size += nbytes
+        while self.budget and self.size > self.budget and len(self._items) > 1:
+            self.size -= self._items.pop(next(iter(self._items)))[2]
+
+
 class _EndCellLattice:
     """T' = T + the end cells' correction columns C on one take's n cells (their shear spread like the
     pressure over their supports, :func:`_end_supports`; collocation stays at the cell centres, so T' is not
@@ -1714,14 +1742,19 @@ class _EndCellLattice:
     correction columns as more right-hand sides of the lattice's own solve. Used as the ToeplitzLattice of
     the take by the active set, the gross-sliding branch and the arrivals' fit."""
 
-    def __init__(self, lat: ToeplitzLattice, ends: list, columns: np.ndarray, normal):
+    def __init__(self, lat: ToeplitzLattice, ends: list, columns: np.ndarray, normal, kept: "_Kept | None" = None,
+                 cells: tuple = ()):
         self.lat = lat
         # as the ToeplitzLattice it stands in for: t (the projected gradient's bound), datum (the shift's), h
         self.t, self.datum, self.h = lat.t, lat.datum, lat.h
         self.idx = np.array([k for k, _, _ in ends], np.int64)
         self.C = columns
         self.normal = normal  # the take's contact, whose end cells these are (the arrivals' fit asks)
-        self._woodbury: dict[tuple, tuple] = {}
+        # the Woodbury columns of each stick set, kept for the take and, in ``kept`` under (cells, runs) with
+        # cells = (first, n, h, the lattice's datum), for the same contact's takes to come (a periodic
+        # history's next cycle)
+        self._woodbury = kept if kept is not None else _Kept(0)
+        self._cells = cells
 
     def matvec(self, v: np.ndarray) -> np.ndarray:
         """T' v."""
@@ -1739,15 +1772,16 @@ class _EndCellLattice:
                 sel.append(c), pos.append(size - 1)
         if not sel:
             return self.lat.solve_runs(runs, n, rhs, ones=ones)
-        key = tuple(runs)
-        got = self._woodbury.get(key)
+        key = (self._cells, tuple(runs))
+        got = self._woodbury.get(key, self.normal)
         cg = 0
-        if got is None:  # T_SS^-1 U and the capacitance (I + V^T T^-1 U)^-1 of this stick set, kept for the take
+        if got is None:  # T_SS^-1 U and the capacitance (I + V^T T^-1 U)^-1 of this stick set
             U = np.concatenate([self.C[a:b] for a, b in runs])[:, sel]
             y, cg = self.lat.solve_runs(runs, n, np.concatenate((rhs, U), axis=1), ones=ones)
             k = rhs.shape[1] + (1 if ones else 0)
             y, Z = y[:, :k], y[:, k:]
-            got = self._woodbury[key] = (Z, np.linalg.inv(np.eye(len(sel)) + Z[pos]))
+            got = (Z, np.linalg.inv(np.eye(len(sel)) + Z[pos]))
+            self._woodbury.put(key, self.normal, got, Z.nbytes)
         else:
             y, cg = self.lat.solve_runs(runs, n, rhs, ones=ones)
         Z, capacitance = got
