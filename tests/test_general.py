@@ -1025,6 +1025,26 @@ def test_receding_edges_against_j3(kind, k_unload):
     assert worst <= J3_TOL, worst
 
 
+@pytest.mark.parametrize("kind", ["hertz", "punch"])
+def test_reversed_slip_zones_inside_the_end_cell_against_j2(kind):
+    """J2 just after the reversal from Q_max = 0.9 f P0 (dQ = 0.0005 .. 0.03 f P0 at 256 nodes): the reversed
+    slip zones, c = a(P0 - dQ/(2f)), are 0.005 - 0.96 of a cell wide, most of them inside the end cell, and
+    every stick edge is within J3_TOL of a cell of the closed form (measured 0.014 / 0.010 of a cell, Hertz
+    / punch). Until 0.3.7 their margins were read against the bound of q's sign there, +f p, while they slip
+    backwards: the edges stayed at the contact's, off by the zone's width (up to 0.26 / 0.32 of a cell)."""
+    problem, solver = helpers.make(kind, "general", nodes=256, estimate=False)
+    top = helpers.states(solver, [(P0, 0.0), (P0, 0.9 * F * P0)])[-1]
+    h = top.memory.spacing
+    worst, widest = 0.0, 0.0
+    for dq in (0.0005, 0.001, 0.002, 0.004, 0.008, 0.016, 0.03):
+        state, _ = solver.step(top, top.t + 1.0, Loads(P0, (0.9 - dq) * F * P0, 0.0, 0.0))
+        c = float(problem.half_width(P0 - dq * P0 / 2))
+        worst = max(worst, abs(state.stick_left + c) / h, abs(state.stick_right - c) / h)
+        widest = max(widest, (state.contact_right - c) / h)
+    assert widest > 1.5 * J3_TOL  # an edge left at the contact's would fail
+    assert worst <= J3_TOL, worst
+
+
 def test_bracketed_edges_on_the_dovetail():
     """The dovetail (2 cycles, no skipping) at 500 nodes against 4000 (its own error about 0.01 of a
     500-node cell): over the partially slipping steps after the ramp, the load maxima left out (there the
