@@ -66,15 +66,20 @@ MAX_RUN_BYTES = 4 * GIB
 history, the stored steps with their fields, and the general solver's
 working set (GENERAL_BYTES_PER_NODE and GENERAL_BYTES_PER_NODE_PAIR). The
 examples need under 50 MB; 10 million stored steps of 201-point fields would
-need 48 GB, and 16,384 general-solver nodes about 3.3 GB."""
+need 48 GB, and 16,384 general-solver nodes about 3.5 GB."""
 
-GENERAL_BYTES_PER_NODE = 4096
+GENERAL_BYTES_PER_NODE = 4096 + 6144
 GENERAL_BYTES_PER_NODE_PAIR = 12
-"""Working memory of the general solver: GENERAL_BYTES_PER_NODE n +
+GENERAL_KEPT_BYTES = 64 * 2 ** 20
+"""Working memory of the general solver: GENERAL_KEPT_BYTES + GENERAL_BYTES_PER_NODE n +
 GENERAL_BYTES_PER_NODE_PAIR n^2 bytes for n nodes. The square term is the
 Levinson table of the Toeplitz log kernel (halfslip.solvers._toeplitz: size^2/2
 doubles for size = 1.5 n cells, and the same for the half-resolution shadow
-lattice of the error estimate: 9 n^2 + 2.25 n^2 bytes)."""
+lattice of the error estimate: 9 n^2 + 2.25 n^2 bytes). Of the linear term,
+6144 bytes a node are what the solver keeps per contact across a periodic
+history's cycles (since 0.3.8, general.LOADS_KEPT = 256 cell-load tables of n
+doubles and as many end-cell column pairs of 2 n), and GENERAL_KEPT_BYTES the
+end cells' Woodbury columns it keeps (general.WOODBURY_BYTES)."""
 
 MAX_SWEEP_CASES = 1_000_000
 """Most cases of a sweep (grid product or explicit list). The result holds

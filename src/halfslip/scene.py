@@ -294,7 +294,8 @@ def run_bytes(scene: Scene, method: str | None = None) -> dict[str, int]:
 
 def _general_bytes(nodes: int) -> int:
     """The general solver's working memory at `nodes` (halfslip.limits)."""
-    return int(limits.GENERAL_BYTES_PER_NODE * nodes + limits.GENERAL_BYTES_PER_NODE_PAIR * nodes * nodes)
+    return int(limits.GENERAL_KEPT_BYTES + limits.GENERAL_BYTES_PER_NODE * nodes
+               + limits.GENERAL_BYTES_PER_NODE_PAIR * nodes * nodes)
 
 
 _RUN_PART_FIELDS = {"history": "loads", "records": "loads", "fields": "output.points", "solver": "solver.nodes"}

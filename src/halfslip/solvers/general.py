@@ -59,6 +59,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from .. import limits
 from ..geometry import NormalProblem, NormalSolution
 from ..state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime, StepReport
 from ..state import frozen as _frozen
@@ -121,7 +122,7 @@ END_CELLS_KEPT = 512
 LOADS_KEPT = 256
 #: Bytes of Woodbury columns (T_SS^-1 of the end cells' columns, _EndCellLattice) kept across takes: a stick set
 #: recurs with its contact every cycle (the dovetail: about 250 a cycle, 16 kB each at 1000 nodes).
-WOODBURY_BYTES = 64 * 2 ** 20
+WOODBURY_BYTES = limits.GENERAL_KEPT_BYTES
 #: Active-set iterations before the projected-gradient restart.
 MAX_ACTIVE_SET = 100
 #: The active set changes a cell only for a violation above this, relative to f max p (Coulomb) and to the
