@@ -1218,9 +1218,9 @@ def test_kept_store_keeps_its_budget_and_its_contact():
     checked), and the oldest items go once the bytes exceed the budget."""
     first, second = object(), object()
     kept = general_module._Kept(100)
-    kept.put("a", first, 1, 40)
-    kept.put("b", first, 2, 40)
-    assert kept.get("a", first) == 1 and kept.get("a", second) is None
-    kept.put("c", second, 3, 40)  # 120 bytes: "a" goes
-    assert kept.get("a", first) is None and kept.get("b", first) == 2 and kept.get("c", second) == 3
+    kept.put("a", (first,), 1, 40)
+    kept.put("b", (first,), 2, 40)
+    assert kept.get("a", (first,)) == 1 and kept.get("a", (second,)) is None
+    kept.put("c", (second,), 3, 40)  # 120 bytes: "a" goes
+    assert kept.get("a", (first,)) is None and kept.get("b", (first,)) == 2 and kept.get("c", (second,)) == 3
     assert kept.size == 80

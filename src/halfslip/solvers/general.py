@@ -380,10 +380,10 @@ class GeneralSolver(TangentialSolver):
             raise ValueError(f"travel must be >= 0, got {travel!r}")
         self._lattices: dict[float, ToeplitzLattice] = {}
         self._kinks, self._graded_kinks = _slope_kinks(problem.profile)
-        self._end_cells: dict[tuple, _EndCell] = {}
-        self._loads: dict[tuple, _Load] = {}
-        self._columns: dict[tuple, tuple] = {}
-        self._paths: dict[tuple, tuple] = {}
+        self._end_cells = _Kept(END_CELLS_KEPT)
+        self._loads = _Kept(LOADS_KEPT)
+        self._columns = _Kept(LOADS_KEPT)
+        self._paths = _Kept(LOADS_KEPT)
         self._woodbury = _Kept(WOODBURY_BYTES)
         self.counters = dict.fromkeys(("steps", "substeps", "iterations", "cg_iterations", "restarts",
                                        "normal_solves"), 0)
@@ -514,11 +514,9 @@ class GeneralSolver(TangentialSolver):
         if not math.isfinite(h):
             h = (self.width if self.width is not None else N1.right - N1.left) / self.nodes
         path = self._path(mem.normal, N1, loads0, loads1)
-        load = self._loads.get((id(N1), h))
-        if load is None or load.N is not N1:
-            load = self._loads[(id(N1), h)] = _Load(N1, h, self._kinks, graded=self._graded_kinks)
-            if len(self._loads) > LOADS_KEPT:
-                del self._loads[next(iter(self._loads))]
+        load = self._loads.get(h, (N1,))
+        if load is None:
+            load = self._loads.put(h, (N1,), _Load(N1, h, self._kinks, graded=self._graded_kinks))
         ctx = _Context(N1, h, path, load, normal_changed)
         return ctx, self._take(mem, h, loads0, loads1, N1, path, load, hint)
 
@@ -528,15 +526,10 @@ class GeneralSolver(TangentialSolver):
             return None
         if N0 is not None and N1.left >= N0.left and N1.right <= N0.right:
             return None
-        key = (loads0, loads1, id(N0), id(N1))
-        got = self._paths.get(key)
-        if got is not None and got[0] is N0 and got[1] is N1:
-            return got[2]
-        path = EdgePath(self.problem, N0, N1, loads0, loads1)
-        self.counters["normal_solves"] += path.solves
-        self._paths[key] = (N0, N1, path)
-        if len(self._paths) > LOADS_KEPT:
-            del self._paths[next(iter(self._paths))]
+        path = self._paths.get((loads0, loads1), (N0, N1))
+        if path is None:
+            path = self._paths.put((loads0, loads1), (N0, N1), EdgePath(self.problem, N0, N1, loads0, loads1))
+            self.counters["normal_solves"] += path.solves
         return path
 
     def _finish(self, state: ContactState, t1: float, loads1: Loads, ctx: "_Context", fine: "_Outcome",
@@ -716,8 +709,9 @@ class GeneralSolver(TangentialSolver):
         G = G + s
         memory = GeneralMemory(N1, h, first, _frozen(status), _frozen(q), _frozen(g), _frozen(G), _frozen(cap),
                                shift)
-        slipping = _slipping_edges(N1, loads0, loads1, f) if mem.normal is not None else (False, False)
-        drives = tuple((u / f, v) for u, v in _edge_drives(N1, loads0, loads1)) if any(slipping) else None
+        drives = _edge_drives(N1, loads0, loads1) if mem.normal is not None else None
+        slipping = _slipping_edges(drives, loads0, loads1, f) if drives is not None else (False, False)
+        drives = tuple((u / f, v) for u, v in drives) if any(slipping) else None
         placement = 0.0
         if not np.any(slip):
             regime, edges = Regime.STICK, (N1.left, N1.right)
@@ -952,27 +946,22 @@ class GeneralSolver(TangentialSolver):
         kept for the recent states). Shape (xs.size, len(ends)); the datum cancels."""
         out = np.empty((xs.size, len(ends)))
         for c, (k, a, b) in enumerate(ends):
-            key = (id(normal), a, b, first + k, h)
-            cell = self._end_cells.get(key)
-            if cell is None or cell.normal is not normal:
-                cell = self._end_cells[key] = _EndCell(normal, a, b, (first + k) * h, h, self._kinks)
-                if len(self._end_cells) > END_CELLS_KEPT:
-                    del self._end_cells[next(iter(self._end_cells))]
+            cell = self._end_cells.get((a, b, first + k, h), (normal,))
+            if cell is None:
+                cell = self._end_cells.put((a, b, first + k, h), (normal,),
+                                           _EndCell(normal, a, b, (first + k) * h, h, self._kinks))
             out[:, c] = -(self.A / math.pi) * cell.potential(xs)
         return out
 
     def _take_columns(self, normal, first, n, h, ends, x) -> np.ndarray:
         """:meth:`_end_columns` at a take's own cell centres ``x`` (read only), kept per contact and cells
-        (END_CELLS_KEPT): the fine and shadow takes of a periodic history's phase recur every cycle."""
-        key = (id(normal), first, n, h)
-        got = self._columns.get(key)
-        if got is None or got[0] is not normal:
+        (LOADS_KEPT): the fine and shadow takes of a periodic history's phase recur every cycle."""
+        columns = self._columns.get((first, n, h), (normal,))
+        if columns is None:
             columns = self._end_columns(normal, first, h, ends, x)
             columns.flags.writeable = False
-            got = self._columns[key] = (normal, columns)
-            if len(self._columns) > LOADS_KEPT:
-                del self._columns[next(iter(self._columns))]
-        return got[1]
+            self._columns.put((first, n, h), (normal,), columns)
+        return columns
 
     def _products(self, xs, xc, spacing, q) -> np.ndarray:
         """sum_j t(xs_i - xc_j) q_j in the package datum, ``q`` of shape (n,) or (n, k).
@@ -1537,10 +1526,11 @@ def _edge_drives(N1: NormalSolution, loads0: Loads, loads1: Loads) -> tuple[tupl
     return tuple((dQ + side * 0.25 * math.pi * d * dS, dP + side * 2.0 * dM0 / d) for side in (-1, 1))
 
 
-def _slipping_edges(N1: NormalSolution, loads0: Loads, loads1: Loads, f: float) -> tuple[bool, bool]:
-    """Whether (S1) says the left / right contact edge slips over the step (see :func:`_unresolved_reach`)."""
+def _slipping_edges(drives: tuple, loads0: Loads, loads1: Loads, f: float) -> tuple[bool, bool]:
+    """Whether (S1) says the left / right contact edge slips over the step, from its ``drives``
+    (:func:`_edge_drives`; see :func:`_unresolved_reach`)."""
     drive = 1e-12 * f * max(abs(loads0.P), abs(loads1.P))
-    out = [bool(abs(u) >= f * v if v > 0.0 else abs(u) > drive) for u, v in _edge_drives(N1, loads0, loads1)]
+    out = [bool(abs(u) >= f * v if v > 0.0 else abs(u) > drive) for u, v in drives]
     return out[0], out[1]
 
 
@@ -1714,26 +1704,31 @@ def _g(v):  # pragma: no cover - compiled
 
 
 class _Kept:
-    """What a contact's takes find again, per key and contact (the NormalSolution, checked by identity: a key
-    holds id(normal)'s cells only), up to ``budget`` bytes; the oldest go first. Budget 0: kept for as long as
-    the object lives (one take)."""
+    """What is found again for the same contacts: values per key and ``owners`` (the NormalSolutions they were
+    found for, checked by identity, so that an id reused by a later object finds nothing), the oldest going
+    first once their sizes add up to more than ``budget`` (None: no bound; a size is 1 an item unless given,
+    bytes for the Woodbury columns). The solver's per-contact tables, end cells, edge paths and Woodbury
+    columns all live in one each."""
 
-    def __init__(self, budget: int):
+    def __init__(self, budget: int | None):
         self.budget, self.size = budget, 0
         self._items: dict[tuple, tuple] = {}
 
-    def get(self, key, normal):
-        got = self._items.get((id(normal), key))
-        return got[1] if got is not None and got[0] is normal else None
+    def get(self, key, owners: tuple):
+        got = self._items.get((key, *map(id, owners)))
+        return got[1] if got is not None and all(a is b for a, b in zip(got[0], owners)) else None
 
-    def put(self, key, normal, value, nbytes: int) -> None:
-        old = self._items.pop((id(normal), key), None)
+    def put(self, key, owners: tuple, value, size: int = 1):
+        """Keep ``value`` (and return it)."""
+        full = (key, *map(id, owners))
+        old = self._items.pop(full, None)
         if old is not None:
             self.size -= old[2]
-        self._items[(id(normal), key)] = (normal, value, nbytes)
-        self.size += nbytes
-        while self.budget and self.size > self.budget and len(self._items) > 1:
+        self._items[full] = (owners, value, size)
+        self.size += size
+        while self.budget is not None and self.size > self.budget and self._items:
             self.size -= self._items.pop(next(iter(self._items)))[2]
+        return value
 
 
 class _EndCellLattice:
@@ -1754,7 +1749,7 @@ class _EndCellLattice:
         # the Woodbury columns of each stick set, kept for the take and, in ``kept`` under (cells, runs) with
         # cells = (first, n, h, the lattice's datum), for the same contact's takes to come (a periodic
         # history's next cycle)
-        self._woodbury = kept if kept is not None else _Kept(0)
+        self._woodbury = kept if kept is not None else _Kept(None)
         self._cells = cells
 
     def matvec(self, v: np.ndarray) -> np.ndarray:
@@ -1774,15 +1769,14 @@ class _EndCellLattice:
         if not sel:
             return self.lat.solve_runs(runs, n, rhs, ones=ones)
         key = (self._cells, tuple(runs))
-        got = self._woodbury.get(key, self.normal)
+        got = self._woodbury.get(key, (self.normal,))
         cg = 0
         if got is None:  # T_SS^-1 U and the capacitance (I + V^T T^-1 U)^-1 of this stick set
             U = np.concatenate([self.C[a:b] for a, b in runs])[:, sel]
             y, cg = self.lat.solve_runs(runs, n, np.concatenate((rhs, U), axis=1), ones=ones)
             k = rhs.shape[1] + (1 if ones else 0)
             y, Z = y[:, :k], y[:, k:]
-            got = (Z, np.linalg.inv(np.eye(len(sel)) + Z[pos]))
-            self._woodbury.put(key, self.normal, got, Z.nbytes)
+            got = self._woodbury.put(key, (self.normal,), (Z, np.linalg.inv(np.eye(len(sel)) + Z[pos])), Z.nbytes)
         else:
             y, cg = self.lat.solve_runs(runs, n, rhs, ones=ones)
         Z, capacitance = got
