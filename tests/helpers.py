@@ -41,6 +41,13 @@ def make(kind: str, method: str = "general", *, nodes: int = 256, P_max: float =
     return problem, GeneralSolver(problem, F, nodes, **kw)
 
 
+def j3_stick_load(P: float, k: float, k_unload: float) -> float:
+    """J3: loaded in proportion to (P0, k f P0), then unloaded to P along dQ = k_unload f dP; the stick zone
+    is the contact of this load, P - abs(k_unload - k) (P0 - P) / (1 +- k) (+ for k_unload > k, where the
+    edges slip backwards; the levels above it set to -+f)."""
+    return P - abs(k_unload - k) * (P0 - P) / (1 + k if k_unload > k else 1 - k)
+
+
 def march(solver, path: Iterable, state=None, t0: float = 0.0, check: Callable | None = None) -> list:
     """Step `solver` through `path` (tuples of up to four loads P, Q, M, sigma) at t0 + 1, t0 + 2, ...
 

@@ -89,7 +89,7 @@ def test_receding_contact_after_proportional_loading(kind, k_unload):
     back = k_unload > k
     for P in (0.95 * P0, 0.8 * P0, 0.6 * P0):
         state = march(method, [(P, k * F * P0 + k_unload * F * (P - P0))], state)[-1]
-        Pc = P - abs(k_unload - k) * (P0 - P) / (1 + k if back else 1 - k)
+        Pc = helpers.j3_stick_load(P, k, k_unload)
         c = problem.half_width(Pc)
         assert state.stick_right == pytest.approx(c, rel=1e-10)
         assert state.stick_left == pytest.approx(-c, rel=1e-10)

@@ -1016,9 +1016,7 @@ def test_receding_edges_against_j3(kind, k_unload):
     worst, slipped = 0.0, 0.0
     for P in np.linspace(1.0, 0.6, 41)[1:] * P0:
         state, _ = solver.step(state, state.t + 1.0, Loads(P, k * F * P0 + k_unload * F * (P - P0), 0.0, 0.0))
-        back = k_unload > k
-        Pc = P - abs(k_unload - k) * (P0 - P) / (1 + k if back else 1 - k)
-        c = float(problem.half_width(Pc))
+        c = float(problem.half_width(helpers.j3_stick_load(P, k, k_unload)))
         worst = max(worst, abs(state.stick_left + c) / h, abs(state.stick_right - c) / h)
         slipped = max(slipped, (state.contact_right - c) / h)
     assert slipped > 1.5 * J3_TOL  # an edge put at the contact edge would fail
