@@ -38,6 +38,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from halfslip.geometry import Hertz, NormalProblem, RoundedPunch
+from halfslip.solvers import general
 from halfslip.solvers.general import GeneralSolver
 from halfslip.state import Loads
 
@@ -95,7 +96,17 @@ def sweep(kind, nodes, lo, hi, num, unload=None):
 def end_sweep(kind, nodes, shifts, widths):
     """J1 with slip zones of ``widths`` cells at the contact edges, the lattice's width set so that the edge
     falls at ``shifts`` places within its cells: rows (w, w_est, u_e, branch) at the right edge (cells;
-    branch 0 within the end cell, 1 the end cell alone slipping, 2 other)."""
+    branch 0 within the end cell, 1 the end cell alone slipping, 2 other). w_est is the local form's own
+    estimate: the solver's END_RULE_* corrections are switched off here (they are what is fitted)."""
+    saved = dict(general._END_RULES)
+    general._END_RULES.update({key: np.zeros_like(value) for key, value in saved.items()})
+    try:
+        return _end_rows(kind, nodes, shifts, widths)
+    finally:
+        general._END_RULES.update(saved)
+
+
+def _end_rows(kind, nodes, shifts, widths):
     problem = NormalProblem(PROFILES[kind], A)
     a = float(problem.half_width(P0))
     rows = []
