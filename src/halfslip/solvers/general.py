@@ -731,6 +731,10 @@ class GeneralSolver(TangentialSolver):
             *edges, placement = _run_edges(x, q, qmax, status, N1, h, runs[0][0], runs[-1][1] - 1, slipping,
                                           drives)
             edges = tuple(edges)
+            # cells beside the edges that are as much stuck as slipping (at the bound, not slipping)
+            placement = max(placement, _undecided_reach(x, q, qmax, s, status, N1, h, runs[0][0], runs[-1][1] - 1,
+                                                        slipping, drives, edges, FLIP_TOL * float(qmax.max()),
+                                                        max(FLIP_TOL * gscale, floor)))
             a, b = max(runs, key=lambda r: r[1] - r[0])
             if len(runs) == 1:
                 widest = edges
@@ -1483,6 +1487,56 @@ def _slope_kinks(profile) -> tuple[np.ndarray, bool]:
     if isinstance(profile, TabulatedProfile):
         return np.asarray(profile.x, dtype=float), False
     return np.zeros(0), False
+
+
+def _undecided_band(q, qmax, s, status, end: int, step: int, qtol: float, stol: float) -> tuple[int, int]:
+    """The cells the active set left undecided at the stick edge beside the stuck cell ``end``, ``step`` the
+    way out of the stick run there (-1 at a left edge, +1 at a right one): (stuck, slipping), how many stuck
+    cells from ``end`` inward carry their bound (within ``qtol``) and how many slipping cells beyond it do
+    not slip (within ``stol``). Each of them is as much a stick cell as a slip cell at the tolerance the
+    active set decides by (FLIP_TOL)."""
+    n = q.size
+    stuck = 0
+    j = end
+    while 0 <= j < n and status[j] == 0 and abs(q[j]) >= qmax[j] - qtol:
+        stuck += 1
+        j -= step
+    slipping = 0
+    j = end + step
+    while 0 <= j < n and status[j] != 0 and abs(s[j]) <= stol:
+        slipping += 1
+        j += step
+    return stuck, slipping
+
+
+def _undecided_reach(x, q, qmax, s, status, N, h, i, k, slipping, drives, edges, qtol, stol) -> float:
+    """How far, in cells, the outermost stick edges (``edges``, of the stick cells i..k) may be from where
+    they are put because the active set left cells beside them undecided (:func:`_undecided_band`): the
+    edge lies anywhere between where the pattern with those cells slipping puts it and where the pattern
+    with them stuck does (_run_edges on each), and their farther one is the reach (the whole run where
+    every cell of it is undecided). 0 where there are none."""
+    reach = 0.0
+    for side, (end, step) in enumerate(((i, -1), (k, 1))):
+        stuck, free = _undecided_band(q, qmax, s, status, end, step, qtol, stol)
+        if stuck + free == 0:
+            continue
+        if stuck > k - i:  # every stuck cell of the run is undecided
+            reach = max(reach, float(k - i + 1))
+            continue
+        for count, now in ((stuck, 0), (free, 1)):
+            if count == 0:
+                continue
+            alt = status.copy()
+            if now == 0:  # the undecided stuck cells slip, the way of their shear
+                cells = end - step * np.arange(count)
+                alt[cells] = np.where(q[cells] >= 0.0, 1, -1)
+                a, b = (i + count, k) if side == 0 else (i, k - count)
+            else:  # the slipping cells that do not slip stick
+                alt[end + step * (1 + np.arange(count))] = 0
+                a, b = (i - count, k) if side == 0 else (i, k + count)
+            other = _run_edges(x, q, qmax, alt, N, h, a, b, slipping, drives)[side]
+            reach = max(reach, abs(other - edges[side]) / h)
+    return reach
 
 
 def _unresolved_reach(slipping: tuple, status: np.ndarray, h: float) -> float:
