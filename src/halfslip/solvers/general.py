@@ -1513,8 +1513,9 @@ def _undecided_reach(x, q, qmax, s, status, N, h, i, k, slipping, drives, edges,
     """How far, in cells, the outermost stick edges (``edges``, of the stick cells i..k) may be from where
     they are put because the active set left cells beside them undecided (:func:`_undecided_band`): the
     edge lies anywhere between where the pattern with those cells slipping puts it and where the pattern
-    with them stuck does (_run_edges on each), and their farther one is the reach (the whole run where
-    every cell of it is undecided). 0 where there are none."""
+    with them stuck does (_run_edges on each), and the reach is the farther one's distance plus the
+    placement floor EDGE_PLACEMENT of that edge (the whole run where every cell of it is undecided). 0
+    where there are none."""
     reach = 0.0
     for side, (end, step) in enumerate(((i, -1), (k, 1))):
         stuck, free = _undecided_band(q, qmax, s, status, end, step, qtol, stol)
@@ -1535,7 +1536,8 @@ def _undecided_reach(x, q, qmax, s, status, N, h, i, k, slipping, drives, edges,
                 alt[end + step * (1 + np.arange(count))] = 0
                 a, b = (i - count, k) if side == 0 else (i, k + count)
             other = _run_edges(x, q, qmax, alt, N, h, a, b, slipping, drives)[side]
-            reach = max(reach, abs(other - edges[side]) / h)
+            # (that edge is placed to EDGE_PLACEMENT as any other)
+            reach = max(reach, abs(other - edges[side]) / h + EDGE_PLACEMENT)
     return reach
 
 
