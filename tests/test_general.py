@@ -900,6 +900,52 @@ def test_undecided_band_counts_the_cells_at_their_bound_that_do_not_slip():
     assert band(q, qmax, s, status, 3, -1, 1e-10, 1e-13) == (0, 0)
 
 
+def test_undecided_reach_spans_the_patterns_either_way():
+    """_undecided_reach on cells of width 1 (16 cells, unit capacity, Hertz's contact only for the
+    contact edges, which no run here reaches): the stick cells 3..12, cells 0..2 and 13..15 slipping
+    forwards by 1. With margins that grow inwards and no undecided cell, 0. With cells 3 and 4 at their
+    bound, the edge the pattern with them slipping gives (from cell 5) is the reach, plus the
+    EDGE_PLACEMENT floor. With a two-cell island 3..4 at its bound beside slipping cells 5..6 (no
+    slip), the island slipping leaves the run 7..12: the reach goes to its edge. With every stick cell
+    at its bound, the reach is their span."""
+    problem = NormalProblem(helpers.PROFILES["hertz"], A)
+    N = problem.solve(P0)
+    n = 16
+    x = np.arange(n) + 0.5
+    qmax = np.ones(n)
+    status = np.zeros(n, np.int8)
+    status[:3] = status[13:] = 1
+    q = np.ones(n)
+    inner = np.abs(np.arange(n) - 7.5)
+    q[3:13] = 1.0 - 0.2 * (5.0 - inner[3:13]) ** 0.5  # margins growing inwards like a square root
+    s = np.zeros(n)
+    s[:3] = s[13:] = 1.0
+    reach = general_module._undecided_reach
+    edges = general_module._run_edges(x, q, qmax, status, N, 1.0, 3, 12)[:2]
+    args = (N, 1.0, 3, 12, (False, False), None)
+    assert reach(x, q, qmax, s, status, *args, edges, 1e-10, 1e-10) == 0.0
+    q[3:5] = 1.0
+    edges = general_module._run_edges(x, q, qmax, status, N, 1.0, 3, 12)[:2]
+    alt = status.copy()
+    alt[3:5] = 1
+    other = general_module._run_edges(x, q, qmax, alt, N, 1.0, 5, 12)[0]
+    got = reach(x, q, qmax, s, status, *args, edges, 1e-10, 1e-10)
+    assert got == pytest.approx(abs(other - edges[0]) + general_module.EDGE_PLACEMENT, rel=1e-12)
+    assert 1.5 < got < 3.5
+    status[5:7], q[5:7], s[5:7] = 1, 1.0, 0.0  # an island 3..4, then cells 5..6 at the bound, not slipping
+    edges = general_module._run_edges(x, q, qmax, status, N, 1.0, 3, 12)[:2]
+    got = reach(x, q, qmax, s, status, *args, edges, 1e-10, 1e-10)
+    alt[5:7] = 1
+    other = general_module._run_edges(x, q, qmax, alt, N, 1.0, 7, 12)[0]
+    assert got == pytest.approx(abs(other - edges[0]) + general_module.EDGE_PLACEMENT, rel=1e-12)
+    assert got > 3.5
+    status[:] = 0
+    status[:3] = status[13:] = 1
+    q[3:13] = 1.0
+    edges = general_module._run_edges(x, q, qmax, status, N, 1.0, 3, 12)[:2]
+    assert reach(x, q, qmax, s, status, *args, edges, 1e-10, 1e-10) == 10.0
+
+
 def test_an_undecided_band_at_the_dovetails_load_maximum_is_in_the_estimate(monkeypatch):
     """The dovetail example at 1000 nodes, the load maximum of its last marched cycle (t = 4.25 s,
     after 16 skipped cycles). There the three stuck cells next to the right stick edge carry their bound

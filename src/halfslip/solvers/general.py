@@ -1514,15 +1514,12 @@ def _undecided_reach(x, q, qmax, s, status, N, h, i, k, slipping, drives, edges,
     they are put because the active set left cells beside them undecided (:func:`_undecided_band`): the
     edge lies anywhere between where the pattern with those cells slipping puts it and where the pattern
     with them stuck does (_run_edges on each), and the reach is the farther one's distance plus the
-    placement floor EDGE_PLACEMENT of that edge (the whole run where every cell of it is undecided). 0
-    where there are none."""
+    placement floor EDGE_PLACEMENT of that edge (the span of the stick cells where every one of them is
+    undecided). 0 where there are none."""
     reach = 0.0
     for side, (end, step) in enumerate(((i, -1), (k, 1))):
         stuck, free = _undecided_band(q, qmax, s, status, end, step, qtol, stol)
         if stuck + free == 0:
-            continue
-        if stuck > k - i:  # every stuck cell of the run is undecided
-            reach = max(reach, float(k - i + 1))
             continue
         for count, now in ((stuck, 0), (free, 1)):
             if count == 0:
@@ -1531,7 +1528,11 @@ def _undecided_reach(x, q, qmax, s, status, N, h, i, k, slipping, drives, edges,
             if now == 0:  # the undecided stuck cells slip, the way of their shear
                 cells = end - step * np.arange(count)
                 alt[cells] = np.where(q[cells] >= 0.0, 1, -1)
-                a, b = (i + count, k) if side == 0 else (i, k - count)
+                left = np.flatnonzero(alt[i:k + 1] == 0)  # the stick cells that remain
+                if left.size == 0:  # every stick cell is undecided: the edge may be anywhere in them
+                    reach = max(reach, float(k - i + 1))
+                    continue
+                a, b = i + int(left[0]), i + int(left[-1])
             else:  # the slipping cells that do not slip stick
                 alt[end + step * (1 + np.arange(count))] = 0
                 a, b = (i - count, k) if side == 0 else (i, k + count)
