@@ -1519,8 +1519,6 @@ def _undecided_reach(x, q, qmax, s, status, N, h, i, k, slipping, drives, edges,
     reach = 0.0
     for side, (end, step) in enumerate(((i, -1), (k, 1))):
         stuck, free = _undecided_band(q, qmax, s, status, end, step, qtol, stol)
-        if stuck + free == 0:
-            continue
         for count, now in ((stuck, 0), (free, 1)):
             if count == 0:
                 continue
