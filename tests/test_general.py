@@ -276,6 +276,53 @@ def test_proportional_loading_sticks_fully(kind, nodes, steps):
     assert rms < PROPORTIONAL_RMS[nodes], rms
 
 
+PROPORTIONAL_UNLOADING = (
+    "open defect (issue 14): proportional unloading reports sub-cell slip zones at the receding edges: "
+    "(S1) says a receding edge under a shear drive slips, and the edge material's traction ratio that "
+    "would say it does not (J3: the zone is |k' - k| wide) is known to the lattice's error only")
+
+
+@pytest.mark.parametrize("kind", PROFILES)
+@pytest.mark.parametrize("nodes", [256, 1024])
+def test_proportional_unloading_sticks(kind, nodes):
+    """Loaded in proportion to (P0, 0.5 f P0) in 10 steps, then unloaded in proportion to half of it in
+    10 more: the exact answer sticks throughout (J3 with k' = k: no slip zone), q = (Q/P) p. Asserted:
+    no cell slips (nothing dissipated), q stays (Q/P) p (PROPORTIONAL_RMS, set for loading at 512 nodes),
+    and every stick edge within its step's estimate of the contact edge.
+
+    An open defect is kept as a recorded outcome, PROPORTIONAL_UNLOADING. About half of the unloading
+    steps report PARTIAL_SLIP with a slip zone inside the end cell. Measured in 0.3.9 (edge to contact
+    edge, in cells): Hertz 0.002 - 0.058 at 256 nodes and 0.003 - 0.019 at 1024; punch 0.001 - 0.074
+    and 0.002 - 0.025. The estimate's half-cell floor for such zones (SUBCELL_PLACEMENT) covers them.
+    Two things make them:
+    * (S1) flags any receding edge with a shear drive, while the exact criterion there is the drive
+      against the edge material's ratio, u - chi f v (zero here), and chi is known to the lattice's
+      error only (1e-3 of it);
+    * END_RULE_WITHIN puts 0.08 - 0.09 of a cell where the local form finds none (w_est = 0) with the
+      contact edge at the end cell's centre (its constant term; J1 with a zone of 0.002 cells reads 0.09).
+    """
+    problem, solver = make(kind, nodes)
+    k = 0.5
+    path = [(P0 * j / 10, k * F * P0 * j / 10) for j in range(1, 11)]
+    path += [(P0 * (1 - 0.05 * j), k * F * P0 * (1 - 0.05 * j)) for j in range(1, 11)]
+    out = march(solver, path)
+    partial = 0
+    for state, report in out:
+        assert report.converged and not report.slipped
+        assert not np.any(state.memory.status) and state.dissipation == 0.0
+        W = state.contact_right - state.contact_left
+        off = max(state.stick_left - state.contact_left, state.contact_right - state.stick_right)
+        assert off <= report.error_estimate * W, PROPORTIONAL_UNLOADING
+        partial += report.regime == Regime.PARTIAL_SLIP
+    assert partial <= 10  # only unloading steps (loading ones stick: test_proportional_loading_sticks_fully)
+    state = out[-1][0]
+    a = state.contact_right
+    x = np.linspace(state.contact_left, a, 4001)
+    p, q = solver.tractions(state.memory, x)
+    rms = np.sqrt(np.mean((q - k * F * p) ** 2)) / (k * F * p.max())
+    assert rms < PROPORTIONAL_RMS[512], rms
+
+
 #: rms of q - closed form / max abs(q_closed) for P, Q, sigma from zero (below), measured (Hertz, Q/P = 0
 #: and 0.3 f; 1 and 10 steps): 7.5e-3 / 1.9e-3 / 4.6e-4 at 128 / 512 / 2048 nodes in one step, 2.8e-3 /
 #: 7.8e-4 / 1.6e-4 in ten: first order; tolerances 2x. Double counting the bulk strain on arrival (the
