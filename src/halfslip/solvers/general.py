@@ -733,8 +733,8 @@ class GeneralSolver(TangentialSolver):
             edges = tuple(edges)
             # cells beside the edges that are as much stuck as slipping (at the bound, not slipping)
             placement = max(placement, _undecided_reach(x, q, qmax, s, status, N1, h, runs[0][0], runs[-1][1] - 1,
-                                                        slipping, drives, edges, FLIP_TOL * float(qmax.max()),
-                                                        max(FLIP_TOL * gscale, floor)))
+                                                        slipping, drives, edges,
+                                                        *_decision_tolerances(qmax, gscale, floor)))
             a, b = max(runs, key=lambda r: r[1] - r[0])
             if len(runs) == 1:
                 widest = edges
@@ -1261,12 +1261,20 @@ def _coarsened(fine: GeneralMemory):
     return first, fine.status[idx].copy()
 
 
+def _decision_tolerances(qmax, gscale, floor) -> tuple[float, float]:
+    """(shear, slip): how far past its bound a stuck cell's shear, and against its direction a slipping cell's
+    increment, may go before the active set changes the cell (FLIP_TOL of f max p and of A f max p h, the
+    slip never below ``floor``, the rounding of the locked displacements)."""
+    return FLIP_TOL * float(qmax.max()), max(FLIP_TOL * gscale, floor)
+
+
 def _flips(q, s, status, qmax, gscale, floor):
-    """The active set's rule (FLIP_TOL): the stick cells over their bound and the slip cells whose
+    """The active set's rule (_decision_tolerances): the stick cells over their bound and the slip cells whose
     increment s opposes their direction, as two masks."""
+    qtol, stol = _decision_tolerances(qmax, gscale, floor)
     stick = status == 0
-    over = stick & (np.abs(q) > qmax + FLIP_TOL * float(qmax.max()))
-    back = ~stick & (status * s < -max(FLIP_TOL * gscale, floor))
+    over = stick & (np.abs(q) > qmax + qtol)
+    back = ~stick & (status * s < -stol)
     return over, back
 
 
@@ -1493,8 +1501,8 @@ def _undecided_band(q, qmax, s, status, end: int, step: int, qtol: float, stol: 
     """The cells the active set left undecided at the stick edge beside the stuck cell ``end``, ``step`` the
     way out of the stick run there (-1 at a left edge, +1 at a right one): (stuck, slipping), how many stuck
     cells from ``end`` inward carry their bound (within ``qtol``) and how many slipping cells beyond it do
-    not slip (within ``stol``). Each of them is as much a stick cell as a slip cell at the tolerance the
-    active set decides by (FLIP_TOL)."""
+    not slip (within ``stol``). Each of them is as much a stick cell as a slip cell at the tolerances the
+    active set decides by (:func:`_decision_tolerances`)."""
     n = q.size
     stuck = 0
     j = end
