@@ -2,7 +2,7 @@
 
     python benchmarks/bench_solve_routes.py            # writes its table to docs/benchmarks.md
 
-ToeplitzLattice.solve_runs solves a stick set of several runs exactly by
+_toeplitz.solve_runs_ones (compiled since 0.4.0) solves a stick set of several runs exactly by
 one of two Schur complements: of the cells of the runs other than the
 longest (the islands: one more column of a solve on the longest run per
 island cell), or of the gaps between the runs within the spanning run (one
@@ -48,7 +48,7 @@ def best_of(f, repeat):
 
 
 def main(argv=None):
-    from halfslip.solvers._toeplitz import GAP_CELLS, ISLAND_COST, ToeplitzLattice
+    from halfslip.solvers._toeplitz import GAP_CELLS, ISLAND_COST, ToeplitzLattice, _gap_solve, _island_solve
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=30)
@@ -60,16 +60,16 @@ def main(argv=None):
     for longest in (200, 440, 800):
         for gap in (5, 20, 93, 160):
             for islands in (1, 4, 17, 40):
-                runs = [(0, islands), (islands + gap, islands + gap + longest)]
+                runs = np.array([(0, islands), (islands + gap, islands + gap + longest)], np.int64)
                 rhs = rng.standard_normal((islands + longest, 2))
-                by_islands = lat._island_solve(runs, 1, rhs)
-                gaps = np.arange(islands, islands + gap)
-                by_gaps = lat._gap_solve(runs, gaps, rhs)
+                ones = np.column_stack((np.ones(islands + longest), rhs))  # with the rigid shift's column, as
+                by_islands = _island_solve(lat.tables, runs, 1, ones)   # the active set solves
+                by_gaps = _gap_solve(lat.tables, runs, rhs)
                 agree = float(np.max(np.abs(by_islands - by_gaps)) / np.max(np.abs(by_gaps)))
                 if not agree < 1e-11:
-                    raise SystemExit(f"the two routes disagree by {agree:.2e} at {runs}")
-                t_i = best_of(lambda: lat._island_solve(runs, 1, rhs), args.repeat)
-                t_g = best_of(lambda: lat._gap_solve(runs, gaps, rhs), args.repeat)
+                    raise SystemExit(f"the two routes disagree by {agree:.2e} at {runs.tolist()}")
+                t_i = best_of(lambda: _island_solve(lat.tables, runs, 1, ones), args.repeat)
+                t_g = best_of(lambda: _gap_solve(lat.tables, runs, rhs), args.repeat)
                 chosen = "islands" if ISLAND_COST * islands <= gap or gap > GAP_CELLS else "gaps"
                 rows.append((longest, gap, islands, t_i, t_g, chosen, agree))
                 print(f"longest {longest:4d}  gap {gap:4d}  islands {islands:3d}:  islands {t_i:.3f} ms  "
@@ -79,7 +79,8 @@ def main(argv=None):
     lines = [BEGIN, "",
              f"`python benchmarks/bench_solve_routes.py` ({platform.machine()}, {os.cpu_count()} cores, "
              f"Python {platform.python_version()}, numpy {np.__version__}; one run, best of {args.repeat}): "
-             "a stick set of one island run and one run of `longest` cells, two right-hand sides, solved "
+             "a stick set of one island run and one run of `longest` cells, a column of ones and two "
+             "right-hand sides (compiled), solved "
              "through the islands' Schur complement and through the gaps'. The solver takes the islands' "
              f"when the gaps hold at least ISLAND_COST = {ISLAND_COST} cells per island cell (or more than "
              f"GAP_CELLS = {GAP_CELLS}).", "",

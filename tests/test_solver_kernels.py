@@ -296,13 +296,15 @@ RUNS = {
 def test_the_inverse_columns_are_the_dense_inverse(lattice):
     """The columns of T_m^-1 at the gaps (a solve for each gap's first, the Gohberg-Semencul recursion for
     the rest) against the dense inverse, for gaps deep inside a span beyond DENSE_CELLS."""
-    runs = [(0, 100), (260, 300), (420, 500)]
     m = 500
     cells = np.r_[100:260, 300:420]
-    got = lattice._inverse_columns(m, runs, 0, cells)
+    got = tz._inverse_columns(lattice.tables, m, np.array([100, 300]), np.array([160, 120]))
     ref = np.linalg.inv(_dense(lattice, m))[:, cells]
     assert got.shape == ref.shape
     assert _rel(got, ref) <= 1e-11
+    # a span within DENSE_CELLS: from the dense inverse
+    got = tz._inverse_columns(lattice.tables, 100, np.array([10, 60]), np.array([5, 1]))
+    assert _rel(got, np.linalg.inv(_dense(lattice, 100))[:, np.r_[10:15, 60]]) <= 1e-11
 
 
 @pytest.mark.parametrize("case", sorted(RUNS))
@@ -326,26 +328,30 @@ def test_solve_runs_is_the_dense_solve_on_the_stick_set(lattice, case):
     assert _rel(got, ref) <= 1e-11
 
 
-@pytest.mark.parametrize("runs,route", [
-    ([(0, 5), (100, 229), (290, 291)], "_island_solve"),   # 6 island cells, 156 gap cells: 20 x 6 <= 156
-    ([(0, 17), (110, 400)], "_gap_solve"),                  # 17 island cells, 93 gap cells: 20 x 17 > 93
-    ([(0, 4), (200, 460)], "_island_solve"),                # gaps beyond GAP_CELLS: the islands' whatever
-    ([(0, 40), (50, 120), (130, 131), (140, 200)], "_gap_solve"),  # more island cells than gap cells
+@pytest.mark.parametrize("runs,way", [
+    ([(0, 5), (100, 229), (290, 291)], tz.ISLANDS),   # 6 island cells, 156 gap cells: 20 x 6 <= 156
+    ([(0, 17), (110, 400)], tz.GAPS),                  # 17 island cells, 93 gap cells: 20 x 17 > 93
+    ([(0, 4), (200, 460)], tz.ISLANDS),                # gaps beyond GAP_CELLS: the islands' whatever
+    ([(0, 40), (50, 120), (130, 131), (140, 200)], tz.GAPS),  # more island cells than gap cells
+    ([(0, 30), (200, 229), (400, 430)], tz.CG),        # 341 gap cells, 59 island cells
+    ([(3, 90)], tz.ONE_RUN),
 ])
-def test_solve_runs_takes_the_cheaper_schur_complement(lattice, monkeypatch, runs, route):
+def test_solve_runs_takes_the_cheaper_schur_complement(lattice, runs, way):
     """The islands' complement costs a column of a solve on the longest run per island cell, the gaps' a
     solve per gap and O(span) per gap cell (benchmarks/bench_solve_routes.py: equal at about ISLAND_COST = 20
-    gap cells per island cell): solve_runs takes the one so chosen, and its answer is the dense solve's."""
-    taken = []
-    for name in ("_island_solve", "_gap_solve"):
-        method = getattr(ToeplitzLattice, name)
-        monkeypatch.setattr(ToeplitzLattice, name,
-                            lambda self, *a, _m=method, _n=name: taken.append(_n) or _m(self, *a))
+    gap cells per island cell): the route is the one so chosen, and both Schur complements give the dense
+    solve's answer on any runs."""
+    array = tz._run_array(runs)
+    assert tz.route(array)[0] == way
     cells = sum(b - a for a, b in runs)
     rhs = np.random.default_rng(3).standard_normal((cells, 2))
     got, _ = lattice.solve_runs(runs, SIZE, rhs)
-    assert taken == [route]
     assert _rel(got, _stick_solve(lattice, runs, SIZE, rhs)) <= 1e-11
+    if len(runs) > 1:
+        ref = _stick_solve(lattice, runs, SIZE, np.column_stack((np.ones(cells), rhs)))
+        ones = np.column_stack((np.ones(cells), rhs))
+        assert _rel(tz._island_solve(lattice.tables, array, tz.route(array)[1], ones), ref) <= 1e-11
+        assert _rel(tz._gap_solve(lattice.tables, array, rhs), ref) <= 1e-11
 
 
 def test_displacements_from_the_kernel_table_are_the_kernel_products():

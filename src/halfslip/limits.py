@@ -78,8 +78,10 @@ doubles for size = 1.5 n cells, and the same for the half-resolution shadow
 lattice of the error estimate: 9 n^2 + 2.25 n^2 bytes). Of the linear term,
 6144 bytes a node are what the solver keeps per contact across a periodic
 history's cycles (since 0.3.8, general.LOADS_KEPT = 256 cell-load tables of n
-doubles and as many end-cell column pairs of 2 n), and GENERAL_KEPT_BYTES the
-end cells' Woodbury columns it keeps (general.WOODBURY_BYTES)."""
+doubles and as many end-cell column pairs of 2 n); the lattices' caches of 32
+run lengths' generator spectra and T_n^-1 1 (_toeplitz.SLOTS, since 0.4.0) take
+2880 bytes a node of the 4096. GENERAL_KEPT_BYTES is a fixed allowance (until
+0.4.0 the budget of the end cells' Woodbury columns the solver kept)."""
 
 MAX_SWEEP_CASES = 1_000_000
 """Most cases of a sweep (grid product or explicit list). The result holds

@@ -27,8 +27,11 @@ from __future__ import annotations
 
 import math
 
+import llvmlite.binding as llvm
 import numba
 import numpy as np
+from numba import types
+from numba.extending import get_cython_function_address
 from scipy import fft as sfft
 
 try:  # scipy's pocketfft binding, without the per-call dispatch of scipy.fft (4 us a call, the cost of a
@@ -142,16 +145,9 @@ def _padded(v: np.ndarray, m: int) -> np.ndarray:
     return out
 
 
-def _lower_toeplitz(c: np.ndarray) -> np.ndarray:
-    """The lower-triangular Toeplitz matrix with first column ``c``."""
-    n = c.size
-    i = np.arange(n)
-    d = i[:, None] - i[None, :]
-    return np.where(d >= 0, c[np.clip(d, 0, None)], 0.0)
-
-
-#: Spectra of T_n^-1 generators kept per lattice (4 columns of m/2 + 1 complex numbers each).
-GENERATORS = 256
+#: Slots of the per-run-length caches of a lattice (the generators' spectra, 2 (1.5 size) complex numbers,
+#: and T_n^-1 1, size numbers, each): about 1.9 kB per cell of the lattice.
+SLOTS = 32
 
 #: Runs of at most this many cells are solved with a cached dense T_n^-1 (n^2 numbers, at most
 #: 8 DENSE_CELLS^3 / 3 bytes for all of them): a product of n^2 beats the four transforms and their
@@ -204,11 +200,14 @@ class ToeplitzLattice:
         if not eps[-1] > 0.0:
             raise ArithmeticError("the lattice kernel is not positive definite (datum too short)")
         self._B, self._eps = B, eps
-        self._gs: dict[int, tuple] = {}
         self._circ: dict[int, tuple] = {}
-        self._inv: dict[int, np.ndarray] = {}
-        self._unit: dict[int, np.ndarray] = {}
         self._t_ext = self.t
+        # the compiled solves' caches, direct-mapped per run length n (slot n mod SLOTS; the contact moves
+        # slowly, so recent lengths recur): the spectra of T_n^-1's generators and T_n^-1 1, with the length
+        # each slot holds (-1: none). Plain arrays: numba's typed dicts cost seconds to compile.
+        half = fast_len(2 * self.size) // 2 + 1
+        keys = np.full((2, SLOTS), -1, np.int64)
+        self.tables = (self.t, B, eps, keys, np.empty((SLOTS, 2, half), complex), np.empty((SLOTS, self.size)))
 
     # -- products ---------------------------------------------------------
     def matvec(self, v: np.ndarray) -> np.ndarray:
@@ -245,223 +244,26 @@ class ToeplitzLattice:
             self._t_ext = kernel(self.h * np.arange(count), self.h, self.datum, self.compliance)
         return self._t_ext
 
-    # -- solves -------------------------------------------------------------
+    # -- solves (compiled, below) ------------------------------------------
     def solve(self, n: int, w: np.ndarray) -> np.ndarray:
-        """T_n^-1 w for w of shape (n,) or (n, k) (Gohberg-Semencul, by FFT)."""
-        if n == 1:
-            return w / self.t[0]
-        if n <= DENSE_CELLS:
-            return self._inverse(n) @ w
-        m, Xc, Uc, Xs, Us = self._generator(n)
-        twod = w.ndim == 2
-        W = w if twod else w[:, None]
-        k = W.shape[1]
-        # L(v)^T w is the correlation of v and w: irfft(conj(V) W), no wrap-around for m >= 2n - 1
-        F = _r2c(_padded(W, m))
-        G = np.empty((F.shape[0], 2 * k), complex)
-        np.multiply(Xc, F, out=G[:, :k])
-        np.multiply(Uc, F, out=G[:, k:])
-        ab = _c2r(G, m)
-        ab[n:] = 0.0
-        AB = _r2c(ab)
-        # (L(x) a - L(u) b) / x0 in one inverse transform (1/x0 is in Xs, Us)
-        out = _c2r(AB[:, :k] * Xs - AB[:, k:] * Us, m)[:n]
-        return out if twod else out[:, 0]
+        """T_n^-1 w for w of shape (n,) or (n, k) (Gohberg-Semencul, by FFT; dense up to DENSE_CELLS)."""
+        out = gs_solve(self.tables, n, np.ascontiguousarray(w.reshape(n, -1), dtype=float))
+        return out if w.ndim == 2 else out[:, 0]
 
-    def _xu(self, n: int) -> tuple[np.ndarray, np.ndarray]:
-        """The Gohberg-Semencul generators of the leading block T_n from the Levinson tables:
-        x = T_n^-1 e_1 and u = (0, x_(n-1), ..., x_1)."""
-        off = (n - 1) * n // 2
-        b = self._B[off:off + n]
-        e = self._eps[n - 1]
-        x = b[::-1] / e
-        u = np.zeros(n)
-        u[1:] = b[:-1] / e
-        return x, u
-
-    def _inverse(self, n: int) -> np.ndarray:
-        """T_n^-1, dense, from the Gohberg-Semencul formula (n <= DENSE_CELLS), cached."""
-        got = self._inv.get(n)
-        if got is None:
-            x, u = self._xu(n)
-            Lx, Lu = _lower_toeplitz(x), _lower_toeplitz(u)
-            got = self._inv[n] = (Lx @ Lx.T - Lu @ Lu.T) / x[0]
-        return got
-
-    def _generator(self, n: int):
-        """(m, conj X, conj U, X / x0, U / x0), the spectra of the Gohberg-Semencul generators of T_n^-1,
-        as columns."""
-        got = self._gs.get(n)
-        if got is None:
-            x, u = self._xu(n)
-            m = sfft.next_fast_len(2 * n, real=True)
-            X, U = _r2c(_padded(x, m))[:, None], _r2c(_padded(u, m))[:, None]
-            got = (m, np.conj(X), np.conj(U), X / x[0], U / x[0])
-            if len(self._gs) >= GENERATORS:  # the oldest goes (the contact moves slowly: recent n recur)
-                del self._gs[next(iter(self._gs))]
-            self._gs[n] = got
-        return got
-
-    def unit(self, n: int) -> np.ndarray:
-        """T_n^-1 1 (read only), cached per n: the active set needs it at every solve (the rigid shift's
-        column), and it depends on the run's length only."""
-        got = self._unit.get(n)
-        if got is None:
-            got = self.solve(n, np.ones(n))
-            got.flags.writeable = False
-            if len(self._unit) >= GENERATORS:
-                del self._unit[next(iter(self._unit))]
-            self._unit[n] = got
-        return got
-
-    def solve_runs(self, runs: list[tuple[int, int]], n: int, rhs: np.ndarray, tol: float = 1e-13,
-                   max_iter: int = 200, ones: bool = False) -> tuple[np.ndarray, int]:
-        """T_SS^-1 rhs on the stick set S = union of ``runs`` (half-open (start, stop) in 0..n); with
-        ``ones``, T_SS^-1 [1, rhs] (a column of ones first), the ones' column from :meth:`unit` where S is
-        one run or is solved through its gaps (T_m^-1 of ones on S is T_m^-1 1 less the columns of T_m^-1 at
-        the gaps, which that route has): a column less to solve.
-
-        One run: a direct Gohberg-Semencul solve. Several runs: exactly,
-        through a Schur complement, whichever applies first of
-
-        * the cells I of the runs other than the longest run R (islands beside
-          a stick zone), at most ISLAND_CELLS, when the gaps hold ISLAND_COST
-          times as many cells or more than GAP_CELLS:
-          with X = T_RR^-1 [T_RI, b_R] (one solve on R),
-          y_I = (T_II - T_IR X_1)^-1 (b_I - T_IR X_2), y_R = X_2 - X_1 y_I;
-        * the gaps Z between the runs, at most GAP_CELLS, in the spanning run
-          (T_SS^-1 b = (T^-1 b~ - X C^-1 (T^-1 b~)_Z)_S, X = T^-1 E_Z, C = X_Z;
-          X's columns by :meth:`_inverse_columns`).
-
-        Otherwise: conjugate gradients preconditioned with the exact solve of
-        every run (block Jacobi; the runs are then few, long and far apart, so
-        few iterations), the products with T over the n cells by FFT. ``rhs``
-        has shape (|S|, k).
-"""
-        if len(runs) == 1:
-            m = runs[0][1] - runs[0][0]
-            y = self.solve(m, rhs)
-            return (np.column_stack((self.unit(m), y)) if ones else y), 0
-        a, b = runs[0][0], runs[-1][1]
-        gaps = np.concatenate([np.arange(runs[i][1], runs[i + 1][0]) for i in range(len(runs) - 1)]) - a
-        lengths = [stop - start for start, stop in runs]
-        longest = int(np.argmax(lengths))
-        islands = sum(lengths) - lengths[longest]
-        if islands <= ISLAND_CELLS and (ISLAND_COST * islands <= gaps.size or gaps.size > GAP_CELLS):
-            return self._island_solve(runs, longest, _with_ones(rhs, ones)), 0
-        if gaps.size <= GAP_CELLS:
-            return self._gap_solve(runs, gaps, rhs, ones), 0
-        return self._cg_runs(runs, n, _with_ones(rhs, ones), tol, max_iter)
-
-    def _gap_solve(self, runs, gaps, rhs, ones=False):
-        """T_SS^-1 rhs (with ``ones``: T_SS^-1 [1, rhs]) by the Schur complement of the ``gaps`` (cells counted
-        from the first run's start) in the spanning run (see :meth:`solve_runs`)."""
-        a, b = runs[0][0], runs[-1][1]
-        m = b - a
-        stick = np.ones(m, bool)
-        stick[gaps] = False
-        X = self._inverse_columns(m, runs, a, gaps)
-        k = rhs.shape[1]
-        Y = np.empty((m, k + 1) if ones else (m, k))
-        wide = np.zeros((m, k))
-        wide[stick] = rhs
-        Y[:, -k:] = self.solve(m, wide)
-        if ones:  # T_m^-1 of ones on the stick cells: T_m^-1 1 less T_m^-1 of ones on the gaps
-            Y[:, 0] = self.unit(m) - X.sum(axis=1)
-        Y = Y - X @ np.linalg.solve(X[gaps], Y[gaps])
-        return Y[stick]
-
-    def _inverse_columns(self, m: int, runs, a: int, gaps: np.ndarray) -> np.ndarray:
-        """The columns of T_m^-1 at the gaps between ``runs`` (``gaps``, their cells counted from ``a``): each
-        gap's first column by a solve, the others by the Gohberg-Semencul recursion from it (O(m) each)."""
-        if m <= DENSE_CELLS:
-            return self._inverse(m)[:, gaps]
-        starts = np.array([runs[i][1] - a for i in range(len(runs) - 1)], np.int64)
-        lengths = np.array([runs[i + 1][0] - runs[i][1] for i in range(len(runs) - 1)], np.int64)
-        E = np.zeros((m, starts.size))
-        E[starts, np.arange(starts.size)] = 1.0
-        x, u = self._xu(m)
-        return _next_columns(x, u, self.solve(m, E), starts, lengths)
-
-    def _island_solve(self, runs, longest, rhs):
-        """T_SS^-1 rhs by the Schur complement of the cells outside run ``longest`` (see :meth:`solve_runs`)."""
-        cells = np.concatenate([np.arange(start, stop) for start, stop in runs])
-        start, stop = runs[longest]
-        first = sum(b - a for a, b in runs[:longest])  # the rows of R in S
-        rows = np.arange(first, first + stop - start)
-        others = np.setdiff1d(np.arange(cells.size), rows, assume_unique=True)
-        inner = self._kernel_to(int(np.max(cells) - np.min(cells)) + 1)
-        main, isl = cells[rows], cells[others]
-        T_RI = inner[np.abs(main[:, None] - isl[None, :])]
-        T_II = inner[np.abs(isl[:, None] - isl[None, :])]
-        k = isl.size
-        X = self.solve(main.size, np.concatenate((T_RI, rhs[rows]), axis=1))
-        X1, X2 = X[:, :k], X[:, k:]
-        y_I = np.linalg.solve(T_II - T_RI.T @ X1, rhs[others] - T_RI.T @ X2)
-        out = np.empty(rhs.shape)
-        out[rows] = X2 - X1 @ y_I
-        out[others] = y_I
-        return out
-
-    def _cg_runs(self, runs, n, rhs, tol, max_iter):
-        """Block-Jacobi preconditioned CG on the union of ``runs`` (see :meth:`solve_runs`).
-
-        Returns
-        -------
-        y : ndarray, shape (|S|, k)
-        iterations : int
-            CG iterations (0 for one run).
-        """
-        cuts = np.cumsum([0] + [b - a for a, b in runs]).tolist()
-        pieces = list(zip(cuts[:-1], cuts[1:]))
-        places = [(slice(a, b), slice(c, d)) for (a, b), (c, d) in zip(runs, pieces)]  # (cells, rows of S)
+    def solve_runs(self, runs, n: int, rhs: np.ndarray, tol: float = 1e-13, max_iter: int = 200,
+                   ones: bool = False) -> tuple[np.ndarray, int]:
+        """T_SS^-1 rhs on the stick set S = union of ``runs`` (half-open (start, stop) in 0..n; ``rhs`` of
+        shape (|S|, k)); with ``ones``, T_SS^-1 [1, rhs] (a column of ones first). Routed by :func:`route`
+        (see :func:`solve_runs_ones`); returns the solution and the CG iterations (0 unless CG)."""
         m, spec = self._circulant(n)
-        spec = spec[:, None]
-        buf = np.zeros((m, rhs.shape[1]))  # T over the n cells, padded: only the rows of S are ever written
-
-        def prec(r):
-            out = np.empty_like(r)
-            for a, b in pieces:
-                out[a:b] = self.solve(b - a, r[a:b])
-            return out
-
-        def op(v):
-            for cells, rows in places:
-                buf[cells] = v[rows]
-            V = _r2c(buf)
-            V *= spec
-            full = _c2r(V, m)
-            return np.concatenate([full[cells] for cells, _ in places])
-
-        y = prec(rhs)
-        r = rhs - op(y)
-        z = prec(r)
-        p = z.copy()
-        rz = _coldot(r, z)
-        norm = _coldot(rhs, rhs)
-        norm[norm == 0.0] = 1.0
-        bound = tol * tol * norm  # |r| / |rhs| > tol, squared
-        zero = np.zeros_like(rz)
-        it = 0
-        while it < max_iter and np.any(_coldot(r, r) > bound):
-            Ap = op(p)
-            pAp = _coldot(p, Ap)
-            # a column already solved (zero residual, e.g. a zero right-hand side) stays put
-            alpha = np.divide(rz, pAp, out=zero.copy(), where=pAp > 0.0)
-            y += alpha * p
-            r -= alpha * Ap
-            z = prec(r)
-            rz_new = _coldot(r, z)
-            p *= np.divide(rz_new, rz, out=zero.copy(), where=rz > 0.0)
-            p += z
-            rz = rz_new
-            it += 1
-        return y, it
+        y, iterations = solve_runs_ones(self.tables, spec, m, _run_array(runs),
+                                        np.ascontiguousarray(rhs, dtype=float), tol, max_iter)
+        return (y if ones else y[:, 1:]), iterations
 
 
-def _with_ones(rhs: np.ndarray, ones: bool) -> np.ndarray:
-    """[1, rhs] with ``ones``, else ``rhs``."""
-    return np.column_stack((np.ones(rhs.shape[0]), rhs)) if ones else rhs
+def _run_array(runs) -> np.ndarray:
+    """``runs`` as a (k, 2) int64 array."""
+    return np.ascontiguousarray(np.asarray(runs, dtype=np.int64).reshape(-1, 2))
 
 
 @numba.njit(cache=True)
@@ -485,11 +287,565 @@ def _next_columns(x, u, first, starts, lengths):  # pragma: no cover - compiled
     return out
 
 
-if hasattr(np, "vecdot"):
-    def _coldot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """Column-wise dot products of two (n, k) arrays."""
-        return np.vecdot(a.T, b.T)
-else:  # pragma: no cover - numpy < 2
-    def _coldot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """Column-wise dot products of two (n, k) arrays."""
-        return np.einsum("ij,ij->j", a, b)
+@numba.njit(cache=True)
+def fast_len(n):  # pragma: no cover - compiled
+    """The smallest 5-smooth number >= n (scipy.fft.next_fast_len(n, real=True))."""
+    best = 1
+    while best < n:
+        best *= 2
+    p5 = 1
+    while p5 < best:
+        p35 = p5
+        while p35 < best:
+            v = p35
+            while v < n:
+                v *= 2
+            if v < best:
+                best = v
+            p35 *= 3
+        p5 *= 5
+    return best
+
+
+@numba.njit(cache=True)
+def _xu(B, eps, n):  # pragma: no cover - compiled
+    """Gohberg-Semencul generators of T_n^-1 from the Levinson tables (ToeplitzLattice._xu)."""
+    off = (n - 1) * n // 2
+    e = eps[n - 1]
+    x = np.empty(n)
+    u = np.zeros(n)
+    for i in range(n):
+        x[i] = B[off + n - 1 - i] / e
+    for i in range(1, n):
+        u[i] = B[off + i - 1] / e
+    return x, u
+
+
+@numba.njit(cache=True)
+def _dense(B, eps, n):  # pragma: no cover - compiled
+    """T_n^-1, dense (n <= DENSE_CELLS), by the Gohberg-Semencul recursion (O(n^2), cheaper than a cache)."""
+    x, u = _xu(B, eps, n)
+    out = np.empty((n, n))
+    for j in range(n):
+        out[0, j] = x[j]
+    for i in range(1, n):
+        out[i, 0] = x[i]
+        for j in range(1, n):
+            out[i, j] = out[i - 1, j - 1] + (x[i] * x[j] - u[i] * u[j]) / x[0]
+    return out
+
+
+@numba.njit(cache=True)
+def _generator(tab, n):  # pragma: no cover - compiled
+    """Rows (X, U): the spectra of the generators x, u of T_n^-1 at length fast_len(2 n), cached; and x_0."""
+    B, eps, keys, gens = tab[1], tab[2], tab[3], tab[4]
+    x, u = _xu(B, eps, n)
+    m = fast_len(2 * n)
+    slot = n % keys.shape[1]
+    g = gens[slot, :, :m // 2 + 1]
+    if keys[0, slot] != n:
+        g[0] = np.fft.rfft(x, n=m)
+        g[1] = np.fft.rfft(u, n=m)
+        keys[0, slot] = n
+    return g, x[0]
+
+
+@numba.njit(cache=True)
+def _sub_product(Y, X, Z):  # pragma: no cover - compiled
+    """Y -= X @ Z, in place. (Loops, not array expressions, throughout this module: each array expression
+    costs numba about a third of a second to compile, and compilation is what a first run waits for.)"""
+    for i in range(X.shape[0]):
+        for j in range(X.shape[1]):
+            x = X[i, j]
+            if x != 0.0:
+                for c in range(Z.shape[1]):
+                    Y[i, c] -= x * Z[j, c]
+
+
+@numba.njit(cache=True)
+def gs_solve(tab, n, W):  # pragma: no cover - compiled
+    """T_n^-1 W for W of shape (n, k) (ToeplitzLattice.solve); a new array."""
+    t, B, eps = tab[0], tab[1], tab[2]
+    k = W.shape[1]
+    out = np.zeros((n, k))
+    if n == 1:
+        for c in range(k):
+            out[0, c] = W[0, c] / t[0]
+        return out
+    if n <= DENSE_CELLS:
+        _sub_product(out, _dense(B, eps, n), W)
+        for i in range(n):
+            for c in range(k):
+                out[i, c] = -out[i, c]
+        return out
+    g, x0 = _generator(tab, n)
+    m = fast_len(2 * n)
+    F = np.fft.rfft(W, n=m, axis=0)
+    h = F.shape[0]
+    G = np.empty((h, 2 * k), np.complex128)
+    for c in range(k):
+        for i in range(h):
+            G[i, c] = np.conj(g[0, i]) * F[i, c]
+            G[i, k + c] = np.conj(g[1, i]) * F[i, c]
+    ab = np.fft.irfft(G, n=m, axis=0)
+    for i in range(n, m):
+        for c in range(2 * k):
+            ab[i, c] = 0.0
+    AB = np.fft.rfft(ab, axis=0)
+    H = np.empty((h, k), np.complex128)
+    for c in range(k):
+        for i in range(h):
+            H[i, c] = (AB[i, c] * g[0, i] - AB[i, k + c] * g[1, i]) / x0
+    full = np.fft.irfft(H, n=m, axis=0)
+    for i in range(n):
+        for c in range(k):
+            out[i, c] = full[i, c]
+    return out
+
+
+@numba.njit(cache=True)
+def _unit(tab, n):  # pragma: no cover - compiled
+    """T_n^-1 1, cached (ToeplitzLattice.unit)."""
+    keys, units = tab[3], tab[5]
+    slot = n % keys.shape[1]
+    if keys[1, slot] != n:
+        y = gs_solve(tab, n, np.ones((n, 1)))
+        for i in range(n):
+            units[slot, i] = y[i, 0]
+        keys[1, slot] = n
+    return units[slot, :n]
+
+
+@numba.njit(cache=True)
+def _end_matvec(spec, m, idx, C, v):  # pragma: no cover - compiled
+    """T' v = T v + C v[idx] over n = v.size cells (_EndCellLattice.matvec): T by the circulant of length m,
+    spectrum ``spec``."""
+    V = np.fft.rfft(v, n=m)
+    for i in range(V.size):
+        V[i] *= spec[i]
+    full = np.fft.irfft(V, n=m)
+    n = v.size
+    out = np.empty(n)
+    for i in range(n):
+        out[i] = full[i]
+    for c in range(idx.size):
+        w = v[idx[c]]
+        for i in range(n):
+            out[i] += C[i, c] * w
+    return out
+
+
+@numba.njit(cache=True)
+def _stick_cells(runs):  # pragma: no cover - compiled
+    """The cells of ``runs``, in order."""
+    total = 0
+    for r in range(runs.shape[0]):
+        total += runs[r, 1] - runs[r, 0]
+    cells = np.empty(total, np.int64)
+    c = 0
+    for r in range(runs.shape[0]):
+        for j in range(runs[r, 0], runs[r, 1]):
+            cells[c] = j
+            c += 1
+    return cells
+
+
+@numba.njit(cache=True)
+def _island_solve(tab, runs, longest, W):  # pragma: no cover - compiled
+    """T_SS^-1 W by the Schur complement of the cells outside run ``longest`` (ToeplitzLattice._island_solve):
+    with X = T_RR^-1 [T_RI, W_R], y_I = (T_II - T_IR X_1)^-1 (W_I - T_IR X_2), y_R = X_2 - X_1 y_I."""
+    t = tab[0]
+    cells = _stick_cells(runs)
+    total = cells.size
+    first = 0
+    for r in range(longest):
+        first += runs[r, 1] - runs[r, 0]
+    nR = runs[longest, 1] - runs[longest, 0]
+    nI = total - nR
+    isl = np.empty(nI, np.int64)  # rows of S outside R
+    c = 0
+    for i in range(total):
+        if i < first or i >= first + nR:
+            isl[c] = i
+            c += 1
+    k = W.shape[1]
+    rhs = np.empty((nR, nI + k))
+    for i in range(nR):
+        for j in range(nI):
+            rhs[i, j] = t[abs(cells[first + i] - cells[isl[j]])]
+        for j in range(k):
+            rhs[i, nI + j] = W[first + i, j]
+    X = gs_solve(tab, nR, rhs)
+    S = np.empty((nI, nI))  # T_II - T_IR X_1
+    b = np.empty((nI, k))  # W_I - T_IR X_2
+    for i in range(nI):
+        for j in range(nI):
+            S[i, j] = t[abs(cells[isl[i]] - cells[isl[j]])]
+        for j in range(k):
+            b[i, j] = W[isl[i], j]
+    for i in range(nI):
+        for l in range(nR):
+            a = rhs[l, i]  # T_RI[l, i]
+            for j in range(nI):
+                S[i, j] -= a * X[l, j]
+            for j in range(k):
+                b[i, j] -= a * X[l, nI + j]
+    y_I = _spd_solve(S, b)
+    out = np.empty(W.shape)
+    for l in range(nR):
+        for j in range(k):
+            s = X[l, nI + j]
+            for i in range(nI):
+                s -= X[l, i] * y_I[i, j]
+            out[first + l, j] = s
+    for i in range(nI):
+        for j in range(k):
+            out[isl[i], j] = y_I[i, j]
+    return out
+
+
+@numba.njit(cache=True)
+def _inverse_columns(tab, m, starts, lengths):  # pragma: no cover - compiled
+    """The columns of T_m^-1 at the gaps (gap b: columns starts[b] .. starts[b] + lengths[b] - 1): each gap's
+    first column by a solve, the others by the Gohberg-Semencul recursion from it (O(m) each); from the
+    dense inverse for m <= DENSE_CELLS."""
+    ng = 0
+    for i in range(starts.size):
+        ng += lengths[i]
+    if m <= DENSE_CELLS:
+        D = _dense(tab[1], tab[2], m)
+        X = np.empty((m, ng))
+        c = 0
+        for g in range(starts.size):
+            for j in range(lengths[g]):
+                for i in range(m):
+                    X[i, c] = D[i, starts[g] + j]
+                c += 1
+        return X
+    E = np.zeros((m, starts.size))
+    for g in range(starts.size):
+        E[starts[g], g] = 1.0
+    x, u = _xu(tab[1], tab[2], m)
+    return _next_columns(x, u, gs_solve(tab, m, E), starts, lengths)
+
+
+@numba.njit(cache=True)
+def _gap_solve(tab, runs, W):  # pragma: no cover - compiled
+    """T_SS^-1 [1, W] by the Schur complement of the gaps in the spanning run (ToeplitzLattice._gap_solve):
+    T_SS^-1 b = (T^-1 b~ - X C^-1 (T^-1 b~)_Z)_S, X = T^-1 E_Z, C = X_Z."""
+    a, b = runs[0, 0], runs[-1, 1]
+    m = b - a
+    nr = runs.shape[0]
+    starts = np.empty(nr - 1, np.int64)
+    lengths = np.empty(nr - 1, np.int64)
+    ng = 0
+    for i in range(nr - 1):
+        starts[i] = runs[i, 1] - a
+        lengths[i] = runs[i + 1, 0] - runs[i, 1]
+        ng += lengths[i]
+    gaps = np.empty(ng, np.int64)
+    c = 0
+    for i in range(nr - 1):
+        for j in range(lengths[i]):
+            gaps[c] = starts[i] + j
+            c += 1
+    X = _inverse_columns(tab, m, starts, lengths)
+    k = W.shape[1]
+    wide = np.zeros((m, k))
+    cells = _stick_cells(runs)
+    for i in range(cells.size):
+        for j in range(k):
+            wide[cells[i] - a, j] = W[i, j]
+    Yw = gs_solve(tab, m, wide)
+    unit = _unit(tab, m)
+    Y = np.empty((m, k + 1))
+    for i in range(m):
+        s = unit[i]
+        for j in range(ng):
+            s -= X[i, j]
+        Y[i, 0] = s
+        for j in range(k):
+            Y[i, 1 + j] = Yw[i, j]
+    XZ = np.empty((ng, ng))
+    YZ = np.empty((ng, k + 1))
+    for i in range(ng):
+        for j in range(ng):
+            XZ[i, j] = X[gaps[i], j]
+        for j in range(k + 1):
+            YZ[i, j] = Y[gaps[i], j]
+    _sub_product(Y, X, _spd_solve(XZ, YZ))
+    out = np.empty((cells.size, k + 1))
+    for i in range(cells.size):
+        for j in range(k + 1):
+            out[i, j] = Y[cells[i] - a, j]
+    return out
+
+
+#: LAPACK's dposv (Cholesky factorisation and solve) from scipy's Cython LAPACK, called from compiled code by
+#: its symbol (so that the compiled functions stay cacheable, which a ctypes pointer would not allow): as fast
+#: as np.linalg.solve there (0.16 ms for 160 cells against 1.1 ms for the elimination of _lu_solve), without
+#: the seconds numba takes to compile np.linalg in every function that uses it.
+llvm.add_symbol("halfslip_dposv", get_cython_function_address("scipy.linalg.cython_lapack", "dposv"))
+_DPOSV = types.ExternalFunction("halfslip_dposv", types.void(*(8 * [types.voidptr])))
+
+
+@numba.njit(cache=True)
+def _spd_solve(A, B):  # pragma: no cover - compiled
+    """A^-1 B for a symmetric positive definite A (the Schur complements of the run solves): dposv. Raises
+    ArithmeticError if the factorisation fails (A not positive definite to rounding)."""
+    n, k = B.shape
+    a = np.ascontiguousarray(A).copy()  # symmetric: its rows are its columns
+    b = np.ascontiguousarray(B.T).copy()  # LAPACK's column-major (n, k)
+    uplo = np.array([76], np.uint8)  # 'L'
+    ints = np.array([n, k, n, n, 0], np.int32)  # n, nrhs, lda, ldb, info
+    _DPOSV(uplo.ctypes, ints[0:].ctypes, ints[1:].ctypes, a.ctypes, ints[2:].ctypes, b.ctypes, ints[3:].ctypes,
+           ints[4:].ctypes)
+    if ints[4] != 0:
+        raise ArithmeticError("a Schur complement of the lattice kernel is not positive definite")
+    return np.ascontiguousarray(b.T)
+
+
+@numba.njit(cache=True)
+def _lu_solve(A, B):  # pragma: no cover - compiled
+    """A^-1 B for the Woodbury capacitance (at most 2 x 2, not symmetric): Gaussian elimination with partial
+    pivoting."""
+    n = A.shape[0]
+    a = A.copy()
+    x = B.copy()
+    for c in range(n):
+        p = c
+        for i in range(c + 1, n):
+            if abs(a[i, c]) > abs(a[p, c]):
+                p = i
+        if p != c:
+            for j in range(n):
+                a[c, j], a[p, j] = a[p, j], a[c, j]
+            for j in range(x.shape[1]):
+                x[c, j], x[p, j] = x[p, j], x[c, j]
+        for i in range(c + 1, n):
+            f = a[i, c] / a[c, c]
+            if f != 0.0:
+                for j in range(c + 1, n):
+                    a[i, j] -= f * a[c, j]
+                for j in range(x.shape[1]):
+                    x[i, j] -= f * x[c, j]
+    for c in range(n - 1, -1, -1):
+        for j in range(x.shape[1]):
+            s = x[c, j]
+            for i in range(c + 1, n):
+                s -= a[c, i] * x[i, j]
+            x[c, j] = s / a[c, c]
+    return x
+
+
+@numba.njit(cache=True)
+def _coldot(a, b):  # pragma: no cover - compiled
+    """Column-wise dot products of two (n, k) arrays."""
+    out = np.zeros(a.shape[1])
+    for c in range(a.shape[1]):
+        for i in range(a.shape[0]):
+            out[c] += a[i, c] * b[i, c]
+    return out
+
+
+@numba.njit(cache=True)
+def _block_solve(tab, runs, cuts, res):  # pragma: no cover - compiled
+    """The block-Jacobi preconditioner: each run's rows solved by its own T_run^-1."""
+    out = np.empty(res.shape)
+    for r in range(runs.shape[0]):
+        part = gs_solve(tab, cuts[r + 1] - cuts[r], np.ascontiguousarray(res[cuts[r]:cuts[r + 1]]))
+        for i in range(part.shape[0]):
+            for c in range(part.shape[1]):
+                out[cuts[r] + i, c] = part[i, c]
+    return out
+
+
+@numba.njit(cache=True)
+def _runs_product(spec, m, runs, cuts, v):  # pragma: no cover - compiled
+    """T_SS v over the cells of ``runs`` (rows cut at ``cuts``), by the circulant of the contact."""
+    k = v.shape[1]
+    buf = np.zeros((m, k))
+    for r in range(runs.shape[0]):
+        for i in range(cuts[r + 1] - cuts[r]):
+            for c in range(k):
+                buf[runs[r, 0] + i, c] = v[cuts[r] + i, c]
+    V = np.fft.rfft(buf, axis=0)
+    for i in range(V.shape[0]):
+        for c in range(k):
+            V[i, c] *= spec[i]
+    full = np.fft.irfft(V, n=m, axis=0)
+    out = np.empty(v.shape)
+    for r in range(runs.shape[0]):
+        for i in range(cuts[r + 1] - cuts[r]):
+            for c in range(k):
+                out[cuts[r] + i, c] = full[runs[r, 0] + i, c]
+    return out
+
+
+@numba.njit(cache=True)
+def _cg_runs(tab, spec, m, runs, W, tol, max_iter):  # pragma: no cover - compiled
+    """Block-Jacobi preconditioned CG on the union of ``runs`` (ToeplitzLattice._cg_runs); and its
+    iterations."""
+    nr = runs.shape[0]
+    cuts = np.zeros(nr + 1, np.int64)
+    for r in range(nr):
+        cuts[r + 1] = cuts[r] + runs[r, 1] - runs[r, 0]
+    size, k = W.shape
+    y = _block_solve(tab, runs, cuts, W)
+    Ay = _runs_product(spec, m, runs, cuts, y)
+    res = np.empty(W.shape)
+    for i in range(size):
+        for c in range(k):
+            res[i, c] = W[i, c] - Ay[i, c]
+    z = _block_solve(tab, runs, cuts, res)
+    p = z.copy()
+    rz = _coldot(res, z)
+    bound = _coldot(W, W)
+    for c in range(k):
+        bound[c] = tol * tol * (bound[c] if bound[c] != 0.0 else 1.0)  # |r| / |W| > tol, squared
+    it = 0
+    while it < max_iter:
+        rr = _coldot(res, res)
+        going = False
+        for c in range(k):
+            if rr[c] > bound[c]:
+                going = True
+        if not going:
+            break
+        Ap = _runs_product(spec, m, runs, cuts, p)
+        pAp = _coldot(p, Ap)
+        for c in range(k):
+            # a column already solved (zero residual, e.g. a zero right-hand side) stays put
+            alpha = rz[c] / pAp[c] if pAp[c] > 0.0 else 0.0
+            for i in range(size):
+                y[i, c] += alpha * p[i, c]
+                res[i, c] -= alpha * Ap[i, c]
+        z = _block_solve(tab, runs, cuts, res)
+        rz_new = _coldot(res, z)
+        for c in range(k):
+            beta = rz_new[c] / rz[c] if rz[c] > 0.0 else 0.0
+            for i in range(size):
+                p[i, c] = beta * p[i, c] + z[i, c]
+            rz[c] = rz_new[c]
+        it += 1
+    return y, it
+
+
+@numba.njit(cache=True)
+def _with_ones(W):  # pragma: no cover - compiled
+    """[1, W]."""
+    out = np.empty((W.shape[0], W.shape[1] + 1))
+    for i in range(W.shape[0]):
+        out[i, 0] = 1.0
+        for c in range(W.shape[1]):
+            out[i, c + 1] = W[i, c]
+    return out
+
+
+#: the routes of :func:`solve_runs_ones`
+ONE_RUN, ISLANDS, GAPS, CG = 0, 1, 2, 3
+
+
+@numba.njit(cache=True)
+def route(runs):  # pragma: no cover - compiled
+    """How :func:`solve_runs_ones` solves on ``runs``: ONE_RUN, ISLANDS, GAPS or CG; and the longest run."""
+    size = 0
+    longest, most = 0, -1
+    for r in range(runs.shape[0]):
+        length = runs[r, 1] - runs[r, 0]
+        size += length
+        if length > most:
+            longest, most = r, length
+    if runs.shape[0] == 1:
+        return ONE_RUN, 0
+    gaps = (runs[-1, 1] - runs[0, 0]) - size
+    islands = size - most
+    if islands <= ISLAND_CELLS and (ISLAND_COST * islands <= gaps or gaps > GAP_CELLS):
+        return ISLANDS, longest
+    if gaps <= GAP_CELLS:
+        return GAPS, longest
+    return CG, longest
+
+
+@numba.njit(cache=True)
+def solve_runs_ones(tab, spec, m, runs, W, cg_tol, cg_max):  # pragma: no cover - compiled
+    """T_SS^-1 [1, W] on the stick set S of ``runs`` ((k, 2) half-open, in the n cells of the circulant
+    (m, spec)), W of shape (|S|, k); and the CG iterations. One run: a direct Gohberg-Semencul solve
+    (T_n^-1 1 from the cache). Several runs: exactly, through a Schur complement, whichever applies first
+    (:func:`route`) of
+
+    * the cells I of the runs other than the longest run R (islands beside
+      a stick zone), at most ISLAND_CELLS, when the gaps hold ISLAND_COST
+      times as many cells or more than GAP_CELLS:
+      with X = T_RR^-1 [T_RI, b_R] (one solve on R),
+      y_I = (T_II - T_IR X_1)^-1 (b_I - T_IR X_2), y_R = X_2 - X_1 y_I;
+    * the gaps Z between the runs, at most GAP_CELLS, in the spanning run
+      (T_SS^-1 b = (T^-1 b~ - X C^-1 (T^-1 b~)_Z)_S, X = T^-1 E_Z, C = X_Z;
+      X's columns by :func:`_inverse_columns`).
+
+    Otherwise: conjugate gradients preconditioned with the exact solve of
+    every run (block Jacobi; the runs are then few, long and far apart, so
+    few iterations), the products with T over the n cells by FFT."""
+    nr = runs.shape[0]
+    k = W.shape[1]
+    if nr == 1:
+        n = runs[0, 1] - runs[0, 0]
+        y = gs_solve(tab, n, W)
+        unit = _unit(tab, n)
+        out = np.empty((n, k + 1))
+        for i in range(n):
+            out[i, 0] = unit[i]
+            for c in range(k):
+                out[i, c + 1] = y[i, c]
+        return out, 0
+    way, longest = route(runs)
+    if way == ISLANDS:
+        return _island_solve(tab, runs, longest, _with_ones(W)), 0
+    if way == GAPS:
+        return _gap_solve(tab, runs, W), 0
+    return _cg_runs(tab, spec, m, runs, _with_ones(W), cg_tol, cg_max)
+
+
+@numba.njit(cache=True)
+def _end_solve(tab, spec, m, runs, n, idx, C, W, cg_tol, cg_max):  # pragma: no cover - compiled
+    """T'_SS^-1 [1, W] with the end cells' columns C by Woodbury where an end cell sticks
+    (_EndCellLattice.solve_runs): (T + U V^T)^-1 y = T^-1 y - T^-1 U (I + V^T T^-1 U)^-1 V^T T^-1 y."""
+    size = 0
+    for r in range(runs.shape[0]):
+        size += runs[r, 1] - runs[r, 0]
+    sel = np.empty(idx.size, np.int64)
+    pos = np.empty(idx.size, np.int64)
+    ns = 0
+    for c in range(idx.size):
+        kc = idx[c]
+        if kc == 0 and runs[0, 0] == 0:
+            sel[ns], pos[ns] = c, 0
+            ns += 1
+        elif kc == n - 1 and kc > 0 and runs[-1, 1] == n:
+            sel[ns], pos[ns] = c, size - 1
+            ns += 1
+    if ns == 0:
+        return solve_runs_ones(tab, spec, m, runs, W, cg_tol, cg_max)
+    k = W.shape[1]
+    ext = np.empty((size, k + ns))
+    cells = _stick_cells(runs)
+    for i in range(size):
+        for c in range(k):
+            ext[i, c] = W[i, c]
+        for c in range(ns):
+            ext[i, k + c] = C[cells[i], sel[c]]
+    Y, cg = solve_runs_ones(tab, spec, m, runs, ext, cg_tol, cg_max)
+    y = np.ascontiguousarray(Y[:, :k + 1])
+    Z = np.ascontiguousarray(Y[:, k + 1:])
+    cap = np.zeros((ns, ns))
+    ypos = np.empty((ns, k + 1))
+    for i in range(ns):
+        cap[i, i] = 1.0
+        for j in range(ns):
+            cap[i, j] += Z[pos[i], j]
+        for j in range(k + 1):
+            ypos[i, j] = y[pos[i], j]
+    _sub_product(y, Z, _lu_solve(cap, ypos))
+    return y, cg
+
+

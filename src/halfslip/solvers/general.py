@@ -64,7 +64,9 @@ from ..geometry import NormalProblem, NormalSolution
 from ..state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime, StepReport
 from ..state import frozen as _frozen
 from ._general_path import EdgePath, arrival_strains
-from ._toeplitz import ToeplitzLattice, _G, kernel, table_products
+from . import _active_kernel
+from ._active_kernel import _run_bounds
+from ._toeplitz import ToeplitzLattice, _end_solve, _G, _run_array, kernel, table_products
 from .base import BACKWARD_SLIP, FORWARD_SLIP, OUT_OF_CONTACT, STICK, TangentialSolver
 
 #: Default resolution: cells across the reference contact width (the widest contact of the history).
@@ -120,11 +122,10 @@ END_CELL_TERMS = 20
 #: 100 steps a cycle, 4 end cells and 2 tables a step, about 2 kB and 8 kB each at 1000 nodes).
 END_CELLS_KEPT = 512
 LOADS_KEPT = 256
-#: Bytes of Woodbury columns (T_SS^-1 of the end cells' columns, _EndCellLattice) kept across takes: a stick set
-#: recurs with its contact every cycle (the dovetail: about 250 a cycle, 16 kB each at 1000 nodes).
-WOODBURY_BYTES = limits.GENERAL_KEPT_BYTES
 #: Active-set iterations before the projected-gradient restart.
 MAX_ACTIVE_SET = 100
+#: the stick-set solves' conjugate gradients (several runs far apart): relative residual, iterations
+CG_TOL, CG_ITERATIONS = 1e-13, 200
 #: The active set changes a cell only for a violation above this, relative to f max p (Coulomb) and to the
 #: displacement scale A f max p h (slip direction): at a degenerate cell (at the bound and not slipping,
 #: common where old slip zones are re-entered) rounding-level violations of either sign would otherwise
@@ -384,7 +385,6 @@ class GeneralSolver(TangentialSolver):
         self._loads = _Kept(LOADS_KEPT)
         self._columns = _Kept(LOADS_KEPT)
         self._paths = _Kept(LOADS_KEPT)
-        self._woodbury = _Kept(WOODBURY_BYTES)
         self.counters = dict.fromkeys(("steps", "substeps", "iterations", "cg_iterations", "restarts",
                                        "normal_solves"), 0)
 
@@ -621,8 +621,7 @@ class GeneralSolver(TangentialSolver):
         # the end cells carry their shear like the pressure over their supports, which reach to the contact's
         # edges (as their loads cap do)
         ends = _end_supports(N1, first, n, h)
-        lat = _EndCellLattice(lat, ends, self._take_columns(N1, first, n, h, ends, x), N1, self._woodbury,
-                              (first, n, h, lat.datum))
+        lat = _EndCellLattice(lat, ends, self._take_columns(N1, first, n, h, ends, x), N1)
         # what each cell carries into the step
         old = mem.normal is not None
         status = np.zeros(n, np.int8)
@@ -744,47 +743,28 @@ class GeneralSolver(TangentialSolver):
         return _Outcome(memory, shift, dissipation, edges, widest, regime, bool(np.any(slip)), iterations, residual,
                         message, slipping, placement)
 
-    def _active_set(self, lat: ToeplitzLattice, n: int, r: np.ndarray, qmax: np.ndarray, total: float,
+    def _active_set(self, lat: "_EndCellLattice", n: int, r: np.ndarray, qmax: np.ndarray, total: float,
                     status: np.ndarray, gscale: float, floor: float = 0.0):
-        """Primal-dual active set for min 1/2 q^T T q + q^T r, |q| <= qmax, sum q = total.
+        """Primal-dual active set for min 1/2 q^T T' q + q^T r, |q| <= qmax, sum q = total (compiled:
+        _active_kernel.active_set), restarted from the projected gradient's pattern when a pattern repeats.
 
         Returns q, the internal shift delta (the equality's multiplier), the
-        final pattern, T q, the iterations and the restarts.
+        final pattern, T' q, the iterations and the restarts.
         """
-        status = status.copy()
-        seen = set()
+        m, spec = lat.lat._circulant(n)
+        qtol, stol = _decision_tolerances(qmax, gscale, floor)
+        r = np.ascontiguousarray(r, dtype=float)
         iterations = restarts = 0
         while True:
-            iterations += 1
-            stick = status == 0
-            if not np.any(stick):
-                status = _reopen(status, qmax, total)
-                stick = status == 0
-            qz = np.where(stick, 0.0, status * qmax)
-            runs = _runs(stick)
-            Tz = lat.matvec(qz)
-            y, cg = lat.solve_runs(runs, n, -(r + Tz)[stick][:, None], ones=True)
+            q, delta, status, Tq, it, cg, code = _active_kernel.active_set(
+                lat.lat.tables, spec, m, lat.idx, lat.C, r, qmax, float(total), status.astype(np.int8), qtol, stol,
+                MAX_ACTIVE_SET * (restarts + 1) - iterations, CG_TOL, CG_ITERATIONS)
+            iterations += it
             self.counters["cg_iterations"] += cg
-            delta = (total - qz.sum() - y[:, 1].sum()) / y[:, 0].sum()
-            q = qz.copy()
-            q[stick] = delta * y[:, 0] + y[:, 1]
-            Tq = lat.matvec(q)
-            s = delta - Tq - r  # slip increment g - g_lock (internal datum)
-            new = status.copy()
-            over, back = _flips(q, s, status, qmax, gscale, floor)
-            new[over] = np.sign(q[over]).astype(np.int8)
-            new[back] = 0
-            if np.array_equal(new, status):
-                return q, delta, status, Tq, iterations, restarts
-            key = new.tobytes()
-            if key in seen or iterations >= MAX_ACTIVE_SET * (restarts + 1):
-                restarts += 1
-                if restarts > 3:
-                    return q, delta, status, Tq, iterations, restarts
-                new = _projected_gradient(lat, n, r, qmax, total, q)
-                seen.clear()
-            seen.add(key)
-            status = new
+            if code == _active_kernel.CONVERGED or restarts == 3:
+                return q, delta, status, Tq, iterations, restarts + (code != _active_kernel.CONVERGED)
+            restarts += 1
+            status = _projected_gradient(lat, n, r, qmax, total, q)
 
     # -- arrivals ---------------------------------------------------------------
     def _arrivals(self, mem: GeneralMemory, loads0: Loads, loads1: Loads, N1: NormalSolution,
@@ -1281,26 +1261,6 @@ def _flips(q, s, status, qmax, gscale, floor):
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     """Half-open (start, stop) of the runs of True in ``mask``."""
     return list(map(tuple, _run_bounds(np.ascontiguousarray(mask, dtype=np.bool_)).tolist()))
-
-
-@numba.njit(cache=True)
-def _run_bounds(mask):  # pragma: no cover - compiled
-    """(runs, 2) array of the half-open (start, stop) of the runs of True in ``mask``."""
-    out = np.empty((mask.size // 2 + 1, 2), np.int64)
-    k = 0
-    inside = False
-    for i in range(mask.size):
-        if mask[i] and not inside:
-            out[k, 0] = i
-            inside = True
-        elif not mask[i] and inside:
-            out[k, 1] = i
-            k += 1
-            inside = False
-    if inside:
-        out[k, 1] = mask.size
-        k += 1
-    return out[:k]
 
 
 def _reopen(status: np.ndarray, qmax: np.ndarray, total: float) -> np.ndarray:
@@ -1801,47 +1761,22 @@ class _EndCellLattice:
     correction columns as more right-hand sides of the lattice's own solve. Used as the ToeplitzLattice of
     the take by the active set, the gross-sliding branch and the arrivals' fit."""
 
-    def __init__(self, lat: ToeplitzLattice, ends: list, columns: np.ndarray, normal, kept: "_Kept | None" = None,
-                 cells: tuple = ()):
+    def __init__(self, lat: ToeplitzLattice, ends: list, columns: np.ndarray, normal):
         self.lat = lat
         # as the ToeplitzLattice it stands in for: t (the projected gradient's bound), datum (the shift's), h
         self.t, self.datum, self.h = lat.t, lat.datum, lat.h
         self.idx = np.array([k for k, _, _ in ends], np.int64)
-        self.C = columns
+        self.C = np.ascontiguousarray(columns, dtype=float).reshape(-1, self.idx.size)
         self.normal = normal  # the take's contact, whose end cells these are (the arrivals' fit asks)
-        # the Woodbury columns of each stick set, kept for the take and, in ``kept`` under (cells, runs) with
-        # cells = (first, n, h, the lattice's datum), for the same contact's takes to come (a periodic
-        # history's next cycle)
-        self._woodbury = kept if kept is not None else _Kept(None)
-        self._cells = cells
 
     def matvec(self, v: np.ndarray) -> np.ndarray:
         """T' v."""
         return self.lat.matvec(v) + self.C @ v[self.idx]
 
     def solve_runs(self, runs, n, rhs, ones: bool = False):
-        """T'_SS^-1 rhs (with ``ones``: T'_SS^-1 [1, rhs]) on the stick set of ``runs``; the CG iterations."""
-        # the end cells stick when the first run starts at the first cell, the last ends at the last
-        size = sum(b - a for a, b in runs)
-        sel, pos = [], []
-        for c, k in enumerate(self.idx.tolist()):
-            if k == 0 and runs[0][0] == 0:
-                sel.append(c), pos.append(0)
-            elif k == n - 1 and k > 0 and runs[-1][1] == n:
-                sel.append(c), pos.append(size - 1)
-        if not sel:
-            return self.lat.solve_runs(runs, n, rhs, ones=ones)
-        key = (self._cells, tuple(runs))
-        got = self._woodbury.get(key, (self.normal,))
-        cg = 0
-        if got is None:  # T_SS^-1 U and the capacitance (I + V^T T^-1 U)^-1 of this stick set
-            U = np.concatenate([self.C[a:b] for a, b in runs])[:, sel]
-            y, cg = self.lat.solve_runs(runs, n, np.concatenate((rhs, U), axis=1), ones=ones)
-            k = rhs.shape[1] + (1 if ones else 0)
-            y, Z = y[:, :k], y[:, k:]
-            got = self._woodbury.put(key, (self.normal,), (Z, np.linalg.inv(np.eye(len(sel)) + Z[pos])), Z.nbytes)
-        else:
-            y, cg = self.lat.solve_runs(runs, n, rhs, ones=ones)
-        Z, capacitance = got
-        # (T + U V^T)^-1 y = T^-1 y - T^-1 U (I + V^T T^-1 U)^-1 V^T T^-1 y, V^T picking the end cells' rows
-        return y - Z @ (capacitance @ y[pos]), cg
+        """T'_SS^-1 rhs (with ``ones``: T'_SS^-1 [1, rhs]) on the stick set of ``runs``, by Woodbury where an
+        end cell sticks (compiled: _toeplitz._end_solve); the CG iterations."""
+        m, spec = self.lat._circulant(n)
+        y, cg = _end_solve(self.lat.tables, spec, m, _run_array(runs), n, self.idx, self.C,
+                           np.ascontiguousarray(rhs, dtype=float), CG_TOL, CG_ITERATIONS)
+        return (y if ones else y[:, 1:]), cg
