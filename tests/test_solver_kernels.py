@@ -205,7 +205,6 @@ def test_arrival_strains_is_its_quadrature_rule_to_rounding(short):
 
 # -- the Toeplitz lattice -------------------------------------------------------------------------------
 
-from scipy import fft as sfft  # noqa: E402
 from scipy.linalg import toeplitz  # noqa: E402
 
 from halfslip.solvers import _toeplitz as tz  # noqa: E402
@@ -226,14 +225,6 @@ def _dense(lat: ToeplitzLattice, n: int) -> np.ndarray:
 
 def _rel(a, b) -> float:
     return float(np.max(np.abs(a - b)) / np.max(np.abs(b)))
-
-
-def test_the_transforms_are_scipy_fft():
-    x = np.random.default_rng(0).standard_normal((36, 3))
-    assert np.allclose(tz._r2c(x), sfft.rfft(x, axis=0), rtol=0, atol=1e-13)
-    X = sfft.rfft(x, axis=0)
-    assert np.allclose(tz._c2r(X, 36), x, rtol=0, atol=1e-14)
-    assert np.allclose(tz._c2r(X[:, 1].copy(), 36), x[:, 1], rtol=0, atol=1e-14)
 
 
 # n sharing one transform length (140, 150), n = size (the circulant needs the kernel beyond the lattice),

@@ -32,45 +32,6 @@ import numba
 import numpy as np
 from numba import types
 from numba.extending import get_cython_function_address
-from scipy import fft as sfft
-
-try:  # scipy's pocketfft binding, without the per-call dispatch of scipy.fft (4 us a call, the cost of a
-    # whole transform of 500 points): checked below against scipy.fft, which is used if this ever differs
-    from scipy.fft._pocketfft import pypocketfft as _pocket
-except ImportError:  # pragma: no cover - scipy without it
-    _pocket = None
-
-
-def _r2c_scipy(a: np.ndarray) -> np.ndarray:
-    return sfft.rfft(a, axis=0)
-
-
-def _c2r_scipy(a: np.ndarray, m: int) -> np.ndarray:
-    return sfft.irfft(a, m, axis=0)
-
-
-def _r2c_pocket(a: np.ndarray) -> np.ndarray:
-    return _pocket.r2c(a, (0,), True, 0, None, 1)
-
-
-def _c2r_pocket(a: np.ndarray, m: int) -> np.ndarray:
-    return _pocket.c2r(a, (0,), m, False, 2, None, 1)
-
-
-def _pocket_works() -> bool:
-    if _pocket is None:  # pragma: no cover
-        return False
-    try:
-        x = np.random.default_rng(1).standard_normal((30, 3))
-        X = _r2c_pocket(x)
-        return (np.array_equal(X, _r2c_scipy(x)) and np.array_equal(_c2r_pocket(X, 30), _c2r_scipy(X, 30))
-                and np.array_equal(_c2r_pocket(X[:, 0].copy(), 30), _c2r_scipy(X[:, 0], 30)))
-    except Exception:  # pragma: no cover - a changed private signature
-        return False
-
-
-#: rfft / irfft along axis 0 of an array of the full transform length (``_r2c(a)``, ``_c2r(A, m)``).
-_r2c, _c2r = (_r2c_pocket, _c2r_pocket) if _pocket_works() else (_r2c_scipy, _c2r_scipy)
 
 
 def kernel(u: np.ndarray, h: float, datum: float, compliance: float) -> np.ndarray:
@@ -136,13 +97,6 @@ def _levinson(t: np.ndarray, n: int):  # pragma: no cover - compiled
         for i in range(k + 2):
             B[off + i] = b[i]
     return B, eps
-
-
-def _padded(v: np.ndarray, m: int) -> np.ndarray:
-    """``v`` (n,) or (n, k) followed by zeros to m rows."""
-    out = np.zeros((m,) + v.shape[1:])
-    out[:v.shape[0]] = v
-    return out
 
 
 #: Slots of the per-run-length caches of a lattice (the generators' spectra, 2 (1.5 size) complex numbers,
@@ -214,18 +168,17 @@ class ToeplitzLattice:
         """T_n v for v of shape (n,) or (n, k), n <= size (cells of one contiguous range)."""
         n = v.shape[0]
         m, spec = self._circulant(n)
-        V = _r2c(_padded(v, m))
-        if v.ndim == 2:
-            return _c2r(V * spec[:, None], m)[:n]
-        return _c2r(V * spec, m)[:n]
+        out = _runs_product(spec, m, np.array([[0, n]], np.int64), np.array([0, n], np.int64),
+                            np.ascontiguousarray(v.reshape(n, -1), dtype=float))
+        return out if v.ndim == 2 else out[:, 0]
 
     def _circulant(self, n: int):
-        """(m, spectrum) of the circulant of length m = next_fast_len(2n) that embeds T_n, cached per m.
+        """(m, spectrum) of the circulant of length m = fast_len(2n) that embeds T_n, cached per m.
 
         The circulant of the whole kernel, c_k = c_(m-k) = t_k (k <= m/2), embeds every T_n with
         2n <= m: one spectrum serves all the n that share a transform length.
         """
-        m = sfft.next_fast_len(2 * n, real=True)
+        m = fast_len(2 * n)
         got = self._circ.get(m)
         if got is None:
             half = m // 2
@@ -233,7 +186,7 @@ class ToeplitzLattice:
             c = np.empty(m)
             c[:half + 1] = t[:half + 1]
             c[half + 1:] = t[1:m - half][::-1]
-            got = self._circ[m] = (m, _r2c(c))
+            got = self._circ[m] = (m, np.fft.rfft(c))
         return got
 
     def _kernel_to(self, count: int) -> np.ndarray:

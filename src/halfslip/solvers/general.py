@@ -66,7 +66,7 @@ from ..state import frozen as _frozen
 from ._general_path import EdgePath, arrival_strains
 from . import _active_kernel
 from ._active_kernel import _run_bounds
-from ._toeplitz import ToeplitzLattice, _end_solve, _G, _run_array, kernel, table_products
+from ._toeplitz import ToeplitzLattice, _end_matvec, _end_solve, _G, _run_array, kernel, table_products
 from .base import BACKWARD_SLIP, FORWARD_SLIP, OUT_OF_CONTACT, STICK, TangentialSolver
 
 #: Default resolution: cells across the reference contact width (the widest contact of the history).
@@ -1770,8 +1770,9 @@ class _EndCellLattice:
         self.normal = normal  # the take's contact, whose end cells these are (the arrivals' fit asks)
 
     def matvec(self, v: np.ndarray) -> np.ndarray:
-        """T' v."""
-        return self.lat.matvec(v) + self.C @ v[self.idx]
+        """T' v for v of shape (n,) (compiled: _toeplitz._end_matvec)."""
+        m, spec = self.lat._circulant(v.size)
+        return _end_matvec(spec, m, self.idx, self.C, np.ascontiguousarray(v, dtype=float))
 
     def solve_runs(self, runs, n, rhs, ones: bool = False):
         """T'_SS^-1 rhs (with ``ones``: T'_SS^-1 [1, rhs]) on the stick set of ``runs``, by Woodbury where an
