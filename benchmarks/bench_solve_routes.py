@@ -2,7 +2,7 @@
 
     python benchmarks/bench_solve_routes.py            # writes its table to docs/benchmarks.md
 
-_toeplitz.solve_runs_ones (compiled since 0.4.0) solves a stick set of several runs exactly by
+_toeplitz.stick_solve (compiled since 0.4.0) solves a stick set of several runs exactly by
 one of two Schur complements: of the cells of the runs other than the
 longest (the islands: one more column of a solve on the longest run per
 island cell), or of the gaps between the runs within the spanning run (one

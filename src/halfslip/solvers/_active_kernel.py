@@ -2,7 +2,7 @@
 
 Primal-dual active set for the step problem (docs/general_solver.md, "Solving it"): each iteration fixes
 the slipping cells at their bounds, solves the stick set S for its shear and the rigid shift (one solve of
-T'_SS on [1, rhs], _toeplitz.solve_runs_ones with the end cells by Woodbury), and flips the cells that
+T'_SS on [1, rhs], _toeplitz.stick_solve with the end cells by Woodbury), and flips the cells that
 violate their bound or slip against their shear (to the tolerances of general._decision_tolerances). The
 solution is unique; the start (the memory's pattern) only sets how many iterations it takes. A pattern
 that comes back, or MAX_ACTIVE_SET iterations, returns REPEATED: the caller restarts from the projected
@@ -17,7 +17,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ._toeplitz import _end_matvec, _end_solve, _stick_cells
+from ._toeplitz import _end_matvec, _stick_cells, stick_solve
 
 
 @numba.njit(cache=True)
@@ -102,7 +102,7 @@ def active_set(tab, spec, m, idx, C, r, qmax, total, status, qtol, stol,
         rhs = np.empty((cells.size, 1))
         for i in range(cells.size):
             rhs[i, 0] = -(r[cells[i]] + Tz[cells[i]])
-        Y, cg = _end_solve(tab, spec, m, runs, n, idx, C, rhs, cg_tol, cg_max)
+        Y, cg = stick_solve(tab, spec, m, runs, n, idx, C, rhs, cg_tol, cg_max)
         cg_total += cg
         rest, ones, part = total, 0.0, 0.0
         for i in range(n):

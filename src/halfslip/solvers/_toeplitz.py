@@ -207,11 +207,15 @@ class ToeplitzLattice:
                    ones: bool = False) -> tuple[np.ndarray, int]:
         """T_SS^-1 rhs on the stick set S = union of ``runs`` (half-open (start, stop) in 0..n; ``rhs`` of
         shape (|S|, k)); with ``ones``, T_SS^-1 [1, rhs] (a column of ones first). Routed by :func:`route`
-        (see :func:`solve_runs_ones`); returns the solution and the CG iterations (0 unless CG)."""
+        (see :func:`stick_solve`); returns the solution and the CG iterations (0 unless CG)."""
         m, spec = self._circulant(n)
-        y, iterations = solve_runs_ones(self.tables, spec, m, _run_array(runs),
-                                        np.ascontiguousarray(rhs, dtype=float), tol, max_iter)
+        y, iterations = stick_solve(self.tables, spec, m, _run_array(runs), n, NO_COLUMNS, np.zeros((n, 0)),
+                                    np.ascontiguousarray(rhs, dtype=float), tol, max_iter)
         return (y if ones else y[:, 1:]), iterations
+
+
+#: no correction columns (a plain T)
+NO_COLUMNS = np.zeros(0, np.int64)
 
 
 def _run_array(runs) -> np.ndarray:
@@ -295,10 +299,13 @@ def _generator(tab, n):  # pragma: no cover - compiled
     x, u = _xu(B, eps, n)
     m = fast_len(2 * n)
     slot = n % keys.shape[1]
-    g = gens[slot, :, :m // 2 + 1]
+    g = gens[slot]
     if keys[0, slot] != n:
-        g[0] = np.fft.rfft(x, n=m)
-        g[1] = np.fft.rfft(u, n=m)
+        X = np.fft.rfft(x, n=m)
+        U = np.fft.rfft(u, n=m)
+        for i in range(X.size):
+            g[0, i] = X[i]
+            g[1, i] = U[i]
         keys[0, slot] = n
     return g, x[0]
 
@@ -695,13 +702,13 @@ def _with_ones(W):  # pragma: no cover - compiled
     return out
 
 
-#: the routes of :func:`solve_runs_ones`
+#: the routes of :func:`stick_solve`
 ONE_RUN, ISLANDS, GAPS, CG = 0, 1, 2, 3
 
 
 @numba.njit(cache=True)
 def route(runs):  # pragma: no cover - compiled
-    """How :func:`solve_runs_ones` solves on ``runs``: ONE_RUN, ISLANDS, GAPS or CG; and the longest run."""
+    """How :func:`stick_solve` solves on ``runs``: ONE_RUN, ISLANDS, GAPS or CG; and the longest run."""
     size = 0
     longest, most = 0, -1
     for r in range(runs.shape[0]):
@@ -721,11 +728,15 @@ def route(runs):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
-def solve_runs_ones(tab, spec, m, runs, W, cg_tol, cg_max):  # pragma: no cover - compiled
-    """T_SS^-1 [1, W] on the stick set S of ``runs`` ((k, 2) half-open, in the n cells of the circulant
-    (m, spec)), W of shape (|S|, k); and the CG iterations. One run: a direct Gohberg-Semencul solve
-    (T_n^-1 1 from the cache). Several runs: exactly, through a Schur complement, whichever applies first
-    (:func:`route`) of
+def stick_solve(tab, spec, m, runs, n, idx, C, W, cg_tol, cg_max):  # pragma: no cover - compiled
+    """T'_SS^-1 [1, W] on the stick set S of ``runs`` ((k, 2) half-open in the n cells of the circulant
+    (m, spec)), W of shape (|S|, k), T' = T + C at the columns ``idx`` (the end cells'; none: idx empty);
+    and the CG iterations.
+
+    Where an end cell of ``idx`` sticks, by Woodbury: (T + U V^T)^-1 y = T^-1 y - T^-1 U (I + V^T T^-1 U)^-1
+    V^T T^-1 y, the columns U as more right-hand sides. The solve with T: on one run a direct
+    Gohberg-Semencul solve (T_n^-1 1 from the cache); on several runs exactly, through a Schur complement,
+    whichever applies first (:func:`route`) of
 
     * the cells I of the runs other than the longest run R (islands beside
       a stick zone), at most ISLAND_CELLS, when the gaps hold ISLAND_COST
@@ -738,34 +749,13 @@ def solve_runs_ones(tab, spec, m, runs, W, cg_tol, cg_max):  # pragma: no cover 
 
     Otherwise: conjugate gradients preconditioned with the exact solve of
     every run (block Jacobi; the runs are then few, long and far apart, so
-    few iterations), the products with T over the n cells by FFT."""
-    nr = runs.shape[0]
-    k = W.shape[1]
-    if nr == 1:
-        n = runs[0, 1] - runs[0, 0]
-        y = gs_solve(tab, n, W)
-        unit = _unit(tab, n)
-        out = np.empty((n, k + 1))
-        for i in range(n):
-            out[i, 0] = unit[i]
-            for c in range(k):
-                out[i, c + 1] = y[i, c]
-        return out, 0
-    way, longest = route(runs)
-    if way == ISLANDS:
-        return _island_solve(tab, runs, longest, _with_ones(W)), 0
-    if way == GAPS:
-        return _gap_solve(tab, runs, W), 0
-    return _cg_runs(tab, spec, m, runs, _with_ones(W), cg_tol, cg_max)
+    few iterations), the products with T over the n cells by FFT.
 
-
-@numba.njit(cache=True)
-def _end_solve(tab, spec, m, runs, n, idx, C, W, cg_tol, cg_max):  # pragma: no cover - compiled
-    """T'_SS^-1 [1, W] with the end cells' columns C by Woodbury where an end cell sticks
-    (_EndCellLattice.solve_runs): (T + U V^T)^-1 y = T^-1 y - T^-1 U (I + V^T T^-1 U)^-1 V^T T^-1 y."""
-    size = 0
-    for r in range(runs.shape[0]):
-        size += runs[r, 1] - runs[r, 0]
+    (One function for the routes and Woodbury: numba re-optimises the code a function calls in every caller,
+    so each level of calls over these solves cost about 3 s of compilation.)"""
+    cells = _stick_cells(runs)
+    size = cells.size
+    # the end cells stick when the first run starts at the first cell, the last ends at the last
     sel = np.empty(idx.size, np.int64)
     pos = np.empty(idx.size, np.int64)
     ns = 0
@@ -777,17 +767,31 @@ def _end_solve(tab, spec, m, runs, n, idx, C, W, cg_tol, cg_max):  # pragma: no 
         elif kc == n - 1 and kc > 0 and runs[-1, 1] == n:
             sel[ns], pos[ns] = c, size - 1
             ns += 1
-    if ns == 0:
-        return solve_runs_ones(tab, spec, m, runs, W, cg_tol, cg_max)
     k = W.shape[1]
-    ext = np.empty((size, k + ns))
-    cells = _stick_cells(runs)
+    ext = np.empty((size, k + ns))  # [W, U]
     for i in range(size):
         for c in range(k):
             ext[i, c] = W[i, c]
         for c in range(ns):
             ext[i, k + c] = C[cells[i], sel[c]]
-    Y, cg = solve_runs_ones(tab, spec, m, runs, ext, cg_tol, cg_max)
+    way, longest = route(runs)
+    cg = 0
+    if way == ONE_RUN:
+        y = gs_solve(tab, size, ext)
+        unit = _unit(tab, size)
+        Y = np.empty((size, k + ns + 1))
+        for i in range(size):
+            Y[i, 0] = unit[i]
+            for c in range(k + ns):
+                Y[i, c + 1] = y[i, c]
+    elif way == ISLANDS:
+        Y = _island_solve(tab, runs, longest, _with_ones(ext))
+    elif way == GAPS:
+        Y = _gap_solve(tab, runs, ext)
+    else:
+        Y, cg = _cg_runs(tab, spec, m, runs, _with_ones(ext), cg_tol, cg_max)
+    if ns == 0:
+        return Y, cg
     y = np.ascontiguousarray(Y[:, :k + 1])
     Z = np.ascontiguousarray(Y[:, k + 1:])
     cap = np.zeros((ns, ns))

@@ -66,7 +66,7 @@ from ..state import frozen as _frozen
 from ._general_path import EdgePath, arrival_strains
 from . import _active_kernel
 from ._active_kernel import _run_bounds
-from ._toeplitz import ToeplitzLattice, _end_matvec, _end_solve, _G, _run_array, kernel, table_products
+from ._toeplitz import ToeplitzLattice, _end_matvec, _G, _run_array, kernel, stick_solve, table_products
 from .base import BACKWARD_SLIP, FORWARD_SLIP, OUT_OF_CONTACT, STICK, TangentialSolver
 
 #: Default resolution: cells across the reference contact width (the widest contact of the history).
@@ -1776,8 +1776,8 @@ class _EndCellLattice:
 
     def solve_runs(self, runs, n, rhs, ones: bool = False):
         """T'_SS^-1 rhs (with ``ones``: T'_SS^-1 [1, rhs]) on the stick set of ``runs``, by Woodbury where an
-        end cell sticks (compiled: _toeplitz._end_solve); the CG iterations."""
+        end cell sticks (compiled: _toeplitz.stick_solve); the CG iterations."""
         m, spec = self.lat._circulant(n)
-        y, cg = _end_solve(self.lat.tables, spec, m, _run_array(runs), n, self.idx, self.C,
+        y, cg = stick_solve(self.lat.tables, spec, m, _run_array(runs), n, self.idx, self.C,
                            np.ascontiguousarray(rhs, dtype=float), CG_TOL, CG_ITERATIONS)
         return (y if ones else y[:, 1:]), cg
