@@ -278,7 +278,7 @@ RUNS = {
     "gaps-wide": [(0, 30), (100, 229), (260, 290)],                   # gaps of 101, 60 other cells: Schur
     "gaps-long": [(0, 140), (200, 300)],                              # one gap of 60 between long runs
     "islands": [(0, 5), (100, 229), (290, 291)],                      # 6 cells beside the longest run: Schur
-    "island-gap": [(0, 17), (110, 400)],                              # 17 island cells, 93 gap cells: the gaps'
+    "island-gap": [(0, 20), (110, 400)],                              # 20 island cells, 90 gap cells: the gaps'
     "cg": [(0, 30), (200, 229), (400, 430)],                          # gaps of 341 > GAP_CELLS: CG, runs dense
     "cg-long": [(0, 140), (310, 480)],                                # CG with FFT solves on both runs
 }
@@ -320,8 +320,9 @@ def test_solve_runs_is_the_dense_solve_on_the_stick_set(lattice, case):
 
 
 @pytest.mark.parametrize("runs,way", [
-    ([(0, 5), (100, 229), (290, 291)], tz.ISLANDS),   # 6 island cells, 156 gap cells: 20 x 6 <= 156
-    ([(0, 17), (110, 400)], tz.GAPS),                  # 17 island cells, 93 gap cells: 20 x 17 > 93
+    ([(0, 5), (100, 229), (290, 291)], tz.ISLANDS),   # 6 island cells, 156 gap cells: 5 x 6 <= 156
+    ([(0, 17), (110, 400)], tz.ISLANDS),               # 17 island cells, 93 gap cells: 5 x 17 <= 93
+    ([(0, 20), (110, 400)], tz.GAPS),                  # 20 island cells, 90 gap cells: 5 x 20 > 90
     ([(0, 4), (200, 460)], tz.ISLANDS),                # gaps beyond GAP_CELLS: the islands' whatever
     ([(0, 40), (50, 120), (130, 131), (140, 200)], tz.GAPS),  # more island cells than gap cells
     ([(0, 30), (200, 229), (400, 430)], tz.CG),        # 341 gap cells, 59 island cells
@@ -329,7 +330,7 @@ def test_solve_runs_is_the_dense_solve_on_the_stick_set(lattice, case):
 ])
 def test_solve_runs_takes_the_cheaper_schur_complement(lattice, runs, way):
     """The islands' complement costs a column of a solve on the longest run per island cell, the gaps' a
-    solve per gap and O(span) per gap cell (benchmarks/bench_solve_routes.py: equal at about ISLAND_COST = 20
+    solve per gap and O(span) per gap cell (benchmarks/bench_solve_routes.py: equal at about ISLAND_COST = 5
     gap cells per island cell): the route is the one so chosen, and both Schur complements give the dense
     solve's answer on any runs."""
     array = tz._run_array(runs)

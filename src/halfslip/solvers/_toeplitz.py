@@ -113,14 +113,15 @@ DENSE_CELLS = 128
 ISLAND_CELLS = 48
 
 #: ... when the gaps between the runs hold at least this many cells per island cell (or more than
-#: GAP_CELLS); otherwise through the gaps' complement (below). What each costs, measured (one island run
-#: beside a run of 200 / 440 / 800 cells, two right-hand sides, benchmarks/bench_solve_routes.py): the
-#: islands' complement a column of a solve on the longest run per island cell (0.03-0.07 ms each), the gaps'
-#: one solve per gap plus O(span) per gap cell and a dense factorisation (0.08-0.2 ms up to 20 gap cells,
-#: 0.2-0.4 ms at 93, 0.5-0.8 ms at 160). Equal cost at about 20 gap cells per island cell. Until 0.3.6 the
-#: islands went first whenever they were fewer cells than the gaps (17 island cells beside 93 gap cells:
-#: 1.4 ms against 0.4 ms by the gaps, at a run of 800 cells).
-ISLAND_COST = 20
+#: GAP_CELLS); otherwise through the gaps' complement (below). What each costs, compiled (0.4.0; one island
+#: run beside a run of 200 / 440 / 800 cells, a column of ones and two right-hand sides,
+#: benchmarks/bench_solve_routes.py): the islands' complement a column of a solve on the longest run per
+#: island cell (0.007-0.03 ms each), the gaps' one solve per gap plus O(span) per gap cell and a Cholesky
+#: factorisation (0.03-0.18 ms up to 20 gap cells, 0.18-0.45 ms at 93, 0.4-0.9 ms at 160). Equal cost at
+#: about 5 gap cells per island cell (17 island cells beside 160 gap cells: 0.14 / 0.34 / 0.65 ms against
+#: 0.45 / 0.63 / 0.89 ms by the gaps). In Python (0.3.6 - 0.3.9) the islands' columns cost more and the
+#: rule was 20; until 0.3.6 the islands went first whenever they were fewer cells than the gaps.
+ISLAND_COST = 5
 
 #: ... or while the gaps between the runs hold at most this many cells: the complement is dense
 #: (GAP_CELLS^2 numbers, a factorisation of GAP_CELLS^3 / 3 operations), its columns of the inverse of
