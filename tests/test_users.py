@@ -233,3 +233,25 @@ def test_steady_warnings_go_to_stderr(tmp_path, monkeypatch):
     assert "warning" not in result.stdout
     assert result.stderr == "halfslip: warning: the tension range is not moderate\n"
     assert cli_module  # the command imports steady_state from halfslip.steady when it runs
+
+
+def test_the_first_general_run_says_it_compiles(tmp_path, monkeypatch):
+    """A general run whose compiled kernels are not in numba's cache yet (the first after installing: about
+    20 s of compilation with no progress) says so on stderr, once, before marching; a cached one, an exact
+    run or --quiet do not. What the note reads (numba's cache index) agrees with numba: after a general run
+    in this process the active set is cached."""
+    import halfslip.solvers._active_kernel as kernel
+
+    scene = tmp_path / "general.yaml"
+    scene.write_text(GROSS.replace("cycles: {count: 4", "cycles: {count: 1").replace(
+        "loads:\n", "loads:\n  - ramp: {to: {P: 5.0e4, sigma: 1.0e7}, duration: 1.0, steps: 2}\n"))
+    note = "halfslip: note: compiling the general solver's kernels"
+    monkeypatch.setattr(kernel, "compiled_and_cached", lambda: False)
+    first = cli("run", scene, "-o", tmp_path / "a.h5")
+    assert first.exit_code == 0, first.output
+    assert first.stderr.count(note) == 1 and first.stdout.strip()
+    for args in (("run", scene, "-o", tmp_path / "b.h5", "--quiet"), ("run", HERTZ, "-o", tmp_path / "c.h5")):
+        assert note not in cli(*args).stderr
+    monkeypatch.undo()
+    assert kernel.compiled_and_cached()
+    assert note not in cli("run", scene, "-o", tmp_path / "d.h5").stderr

@@ -228,6 +228,21 @@ def describe_profile(profile: Any) -> str:
     return repr(profile)
 
 
+def _note_first_compilation(scene, method) -> None:
+    """Say so when the general solver's compiled kernels are not in numba's cache yet (the first general run
+    after installing compiles them, about 20 s, and shows no progress meanwhile)."""
+    from .simulator import MethodError, choose_method
+    from .solvers._active_kernel import compiled_and_cached
+
+    try:
+        general = choose_method(scene, method) == "general"
+    except MethodError:
+        return  # simulate says what is wrong
+    if general and not compiled_and_cached():
+        click.echo("halfslip: note: compiling the general solver's kernels (once after installing, about 20 s)",
+                   err=True)
+
+
 @main.command()
 @click.argument("scene_file", metavar="SCENE.yaml", type=INPUT_FILE)
 @click.option("-o", "--output", "output", metavar="OUT.h5", type=OUTPUT_PATH, help="Result file (default: the scene name with .h5, here).")
@@ -279,6 +294,8 @@ def run(scene_file: str, output: str | None, method: str | None, nodes: int | No
         handlers = {sig: signal.signal(sig, _request_stop) for sig in (signal.SIGINT, signal.SIGTERM)
                     if signal.getsignal(sig) is not signal.SIG_IGN}
         progress = Progress("step", scene.name, enabled=not quiet and sys.stderr.isatty(), delay=1.0)
+        if not quiet:
+            _note_first_compilation(scene, method)
         try:
             result = simulate(scene, method=method, nodes=nodes, progress=progress,
                               writer=RunFileWriter(out, min_interval=checkpoint_every), resume=previous_run,

@@ -40,6 +40,15 @@ def _run_bounds(mask):  # pragma: no cover - compiled
     return out[:k]
 
 
+def compiled_and_cached() -> bool:
+    """Whether numba's cache holds a compiled :func:`active_set` for this source (read from numba's cache
+    index, a private interface: True when it cannot be read, so that a caller says nothing then)."""
+    try:
+        return bool(active_set._cache._cache_file._load_index())
+    except Exception:  # pragma: no cover - another numba
+        return True
+
+
 #: outcome codes of :func:`active_set`
 CONVERGED, REPEATED = 0, 1
 
