@@ -471,3 +471,24 @@ def test_end_cell_lattice_solves_and_products_are_the_dense_ones():
         got, _ = W.solve_runs(runs, n, rhs, ones=True)
         full = np.column_stack((np.ones(int(stick.sum())), rhs))
         assert _rel(got, np.linalg.solve(Tp[np.ix_(stick, stick)], full)) <= 1e-11
+
+
+def test_the_compiled_small_solves_and_transform_lengths():
+    """The compiled helpers of the stick-set solves: LAPACK's dposv by symbol (_spd_solve) is the dense solve
+    on a symmetric positive definite matrix and raises on one that is not; the elimination of the Woodbury
+    capacitance (_lu_solve) pivots (a zero first pivot); fast_len is scipy's next_fast_len(n, real=True),
+    the transform lengths of the products and of the Gohberg-Semencul generators."""
+    from scipy import fft as sfft
+
+    rng = np.random.default_rng(5)
+    M = rng.standard_normal((40, 40))
+    S = M @ M.T + np.eye(40)
+    B = rng.standard_normal((40, 3))
+    assert _rel(tz._spd_solve(S, B), np.linalg.solve(S, B)) <= 1e-12
+    with pytest.raises(ArithmeticError):
+        tz._spd_solve(S - 100.0 * np.eye(40), B)
+    C = np.array([[0.0, 2.0], [3.0, 1.0]])
+    y = rng.standard_normal((2, 2))
+    assert _rel(tz._lu_solve(C, y), np.linalg.solve(C, y)) <= 1e-14
+    for n in list(range(1, 300)) + [1023, 2049, 4097, 12289, 30001]:
+        assert tz.fast_len(n) == sfft.next_fast_len(n, real=True), n
