@@ -49,14 +49,28 @@ def compiled_and_cached() -> bool:
         return True
 
 
+@numba.njit(cache=True)
+def flips(q, s, status, qmax, qtol, stol):  # pragma: no cover - compiled
+    """The active set's rule: the stick cells whose shear q is over its bound by more than ``qtol``, and the
+    slipping cells whose increment s opposes their direction by more than ``stol``, as two masks."""
+    over = np.zeros(q.size, np.bool_)
+    back = np.zeros(q.size, np.bool_)
+    for i in range(q.size):
+        if status[i] == 0:
+            over[i] = abs(q[i]) > qmax[i] + qtol
+        else:
+            back[i] = status[i] * s[i] < -stol
+    return over, back
+
+
 #: outcome codes of :func:`active_set`
 CONVERGED, REPEATED = 0, 1
 
 
 @numba.njit(cache=True)
 def _reopen(status, qmax, total):  # pragma: no cover - compiled
-    """All cells slip but cannot carry ``total``: stick the middle one of those whose direction carries the
-    excess (general._reopen)."""
+    """All cells slip but the bounds cannot carry ``total`` with these signs: stick the middle one of the cells
+    whose direction carries the excess (equilibrium needs a free cell)."""
     excess = -total
     for i in range(status.size):
         excess += status[i] * qmax[i]
@@ -124,14 +138,17 @@ def active_set(tab, spec, m, idx, C, r, qmax, total, status, qtol, stol,
         for i in range(cells.size):
             q[cells[i]] = delta * Y[i, 0] + Y[i, 1]
         Tq = _end_matvec(spec, m, idx, C, q)
+        s = np.empty(n)  # the slip increment g - g_lock (internal datum)
+        for i in range(n):
+            s[i] = delta - Tq[i] - r[i]
+        over, back = flips(q, s, status, qmax, qtol, stol)
         new = status.copy()
         same = True
         for i in range(n):
-            if status[i] == 0:
-                if abs(q[i]) > qmax[i] + qtol:
-                    new[i] = 1 if q[i] > 0 else -1
-                    same = False
-            elif status[i] * (delta - Tq[i] - r[i]) < -stol:
+            if over[i]:
+                new[i] = 1 if q[i] > 0 else -1
+                same = False
+            elif back[i]:
                 new[i] = 0
                 same = False
         if same:

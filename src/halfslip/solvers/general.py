@@ -1249,30 +1249,16 @@ def _decision_tolerances(qmax, gscale, floor) -> tuple[float, float]:
 
 
 def _flips(q, s, status, qmax, gscale, floor):
-    """The active set's rule (_decision_tolerances): the stick cells over their bound and the slip cells whose
-    increment s opposes their direction, as two masks."""
-    qtol, stol = _decision_tolerances(qmax, gscale, floor)
-    stick = status == 0
-    over = stick & (np.abs(q) > qmax + qtol)
-    back = ~stick & (status * s < -stol)
-    return over, back
+    """The active set's rule (_decision_tolerances, _active_kernel.flips): the stick cells over their bound and
+    the slip cells whose increment s opposes their direction, as two masks."""
+    return _active_kernel.flips(np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(s, dtype=float),
+                                np.ascontiguousarray(status, dtype=np.int8), qmax,
+                                *_decision_tolerances(qmax, gscale, floor))
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     """Half-open (start, stop) of the runs of True in ``mask``."""
     return list(map(tuple, _run_bounds(np.ascontiguousarray(mask, dtype=np.bool_)).tolist()))
-
-
-def _reopen(status: np.ndarray, qmax: np.ndarray, total: float) -> np.ndarray:
-    """All cells slip but the bounds cannot carry ``total`` with these signs: stick the cell nearest the middle
-    of the cells whose direction carries the excess (equilibrium needs a free cell)."""
-    status = status.copy()
-    excess = float(np.sum(status * qmax)) - total
-    cand = np.flatnonzero(status == (1 if excess > 0 else -1))
-    if cand.size == 0:
-        cand = np.arange(status.size)
-    status[cand[cand.size // 2]] = 0
-    return status
 
 
 def _projected_gradient(lat: ToeplitzLattice, n: int, r: np.ndarray, qmax: np.ndarray, total: float,
