@@ -252,6 +252,10 @@ def test_the_first_general_run_says_it_compiles(tmp_path, monkeypatch):
     assert first.stderr.count(note) == 1 and first.stdout.strip()
     for args in (("run", scene, "-o", tmp_path / "b.h5", "--quiet"), ("run", HERTZ, "-o", tmp_path / "c.h5")):
         assert note not in cli(*args).stderr
+    sweep = tmp_path / "sweep.yaml"  # a sweep's workers would compile at once: said before they start
+    sweep.write_text(f"scene: {scene.name}\nvary:\n  friction: [0.5, 0.6]\n")
+    swept = cli("sweep", sweep, "-o", tmp_path / "sweep.h5", "--workers", 1)
+    assert swept.exit_code == 0 and swept.stderr.count(note) == 1, swept.output
     monkeypatch.undo()
     assert kernel.compiled_and_cached()
     assert note not in cli("run", scene, "-o", tmp_path / "d.h5").stderr

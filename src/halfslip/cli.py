@@ -646,6 +646,13 @@ def sweep_command(sweep_file: str, output: str | None, workers: int | None, sche
     spec = load_sweep(sweep_file)
     out = check_output(Path(output) if output else Path(f"{Path(sweep_file).stem}.h5"),
                        inputs=[spec.file, spec.scene_path], overwrite=overwrite)
+    if not quiet and spec.n_cases:
+        try:
+            first = spec.case_scene(0)
+        except HalfslipInputError:
+            first = None  # the sweep records the case as failed
+        if first is not None:
+            _note_first_compilation(first, None)
 
     def _terminate(signum, frame):  # SIGTERM behaves like Ctrl-C: stop and keep what is done
         raise KeyboardInterrupt
