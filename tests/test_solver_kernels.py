@@ -475,7 +475,8 @@ def test_end_cell_lattice_solves_and_products_are_the_dense_ones():
 
 def test_the_compiled_small_solves_and_transform_lengths():
     """The compiled helpers of the stick-set solves: LAPACK's dposv by symbol (_spd_solve) is the dense solve
-    on a symmetric positive definite matrix and raises on one that is not; the elimination of the Woodbury
+    on a symmetric positive definite matrix, and on one that is not it falls back to the elimination
+    (1e-10: the indefinite matrix's condition); the elimination of the Woodbury
     capacitance (_lu_solve) pivots (a zero first pivot); fast_len is scipy's next_fast_len(n, real=True),
     the transform lengths of the products and of the Gohberg-Semencul generators."""
     from scipy import fft as sfft
@@ -485,8 +486,9 @@ def test_the_compiled_small_solves_and_transform_lengths():
     S = M @ M.T + np.eye(40)
     B = rng.standard_normal((40, 3))
     assert _rel(tz._spd_solve(S, B), np.linalg.solve(S, B)) <= 1e-12
-    with pytest.raises(ArithmeticError):
-        tz._spd_solve(S - 100.0 * np.eye(40), B)
+    indefinite = S - 10.0 * np.eye(40)  # dposv refuses it: solved by elimination instead
+    assert np.min(np.linalg.eigvalsh(indefinite)) < 0.0
+    assert _rel(tz._spd_solve(indefinite, B), np.linalg.solve(indefinite, B)) <= 1e-10
     C = np.array([[0.0, 2.0], [3.0, 1.0]])
     y = rng.standard_normal((2, 2))
     assert _rel(tz._lu_solve(C, y), np.linalg.solve(C, y)) <= 1e-14

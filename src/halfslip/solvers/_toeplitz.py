@@ -552,8 +552,9 @@ _DPOSV = types.ExternalFunction("halfslip_dposv", types.void(*(8 * [types.voidpt
 
 @numba.njit(cache=True)
 def _spd_solve(A, B):  # pragma: no cover - compiled
-    """A^-1 B for a symmetric positive definite A (the Schur complements of the run solves): dposv. Raises
-    ArithmeticError if the factorisation fails (A not positive definite to rounding)."""
+    """A^-1 B for a symmetric positive definite A (the Schur complements of the run solves): dposv; by
+    Gaussian elimination (:func:`_lu_solve`) if the factorisation fails (A not positive definite to rounding,
+    as np.linalg.solve did here until 0.4.0)."""
     n, k = B.shape
     a = np.ascontiguousarray(A).copy()  # symmetric: its rows are its columns
     b = np.ascontiguousarray(B.T).copy()  # LAPACK's column-major (n, k)
@@ -562,14 +563,14 @@ def _spd_solve(A, B):  # pragma: no cover - compiled
     _DPOSV(uplo.ctypes, ints[0:].ctypes, ints[1:].ctypes, a.ctypes, ints[2:].ctypes, b.ctypes, ints[3:].ctypes,
            ints[4:].ctypes)
     if ints[4] != 0:
-        raise ArithmeticError("a Schur complement of the lattice kernel is not positive definite")
+        return _lu_solve(A, B)
     return np.ascontiguousarray(b.T)
 
 
 @numba.njit(cache=True)
 def _lu_solve(A, B):  # pragma: no cover - compiled
-    """A^-1 B for the Woodbury capacitance (at most 2 x 2, not symmetric): Gaussian elimination with partial
-    pivoting."""
+    """A^-1 B for the Woodbury capacitance (at most 2 x 2, not symmetric), and for a Schur complement whose
+    Cholesky factorisation failed: Gaussian elimination with partial pivoting."""
     n = A.shape[0]
     a = A.copy()
     x = B.copy()
