@@ -240,7 +240,7 @@ def test_the_first_general_run_says_it_compiles(tmp_path, monkeypatch):
     20 s of compilation with no progress) says so on stderr, once, before marching; a cached one, an exact
     run or --quiet do not. What the note reads (numba's cache index) agrees with numba: after a general run
     in this process the active set is cached."""
-    import halfslip.solvers._active_kernel as kernel
+    import halfslip.solvers._toeplitz as kernel
 
     scene = tmp_path / "general.yaml"
     scene.write_text(GROSS.replace("cycles: {count: 4", "cycles: {count: 1").replace(

@@ -232,7 +232,7 @@ def _note_first_compilation(scene, method) -> None:
     """Say so when the general solver's compiled kernels are not in numba's cache yet (the first general run
     after installing compiles them, about 20 s, and shows no progress meanwhile)."""
     from .simulator import MethodError, choose_method
-    from .solvers._active_kernel import compiled_and_cached
+    from .solvers._toeplitz import compiled_and_cached
 
     try:
         general = choose_method(scene, method) == "general"

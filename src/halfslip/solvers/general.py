@@ -64,9 +64,8 @@ from ..geometry import NormalProblem, NormalSolution
 from ..state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime, StepReport
 from ..state import frozen as _frozen
 from ._general_path import EdgePath, arrival_strains
-from . import _active_kernel
-from ._active_kernel import _run_bounds
-from ._toeplitz import ToeplitzLattice, _end_matvec, _G, _run_array, kernel, stick_solve, table_products
+from . import _toeplitz
+from ._toeplitz import ToeplitzLattice, _end_matvec, _G, _run_array, _run_bounds, kernel, stick_solve, table_products
 from .base import BACKWARD_SLIP, FORWARD_SLIP, OUT_OF_CONTACT, STICK, TangentialSolver
 
 #: Default resolution: cells across the reference contact width (the widest contact of the history).
@@ -746,7 +745,7 @@ class GeneralSolver(TangentialSolver):
     def _active_set(self, lat: "_EndCellLattice", n: int, r: np.ndarray, qmax: np.ndarray, total: float,
                     status: np.ndarray, gscale: float, floor: float = 0.0):
         """Primal-dual active set for min 1/2 q^T T' q + q^T r, |q| <= qmax, sum q = total (compiled:
-        _active_kernel.active_set), restarted from the projected gradient's pattern when a pattern repeats.
+        _toeplitz.active_set), restarted from the projected gradient's pattern when a pattern repeats.
 
         Returns q, the internal shift delta (the equality's multiplier), the
         final pattern, T' q, the iterations and the restarts.
@@ -756,13 +755,13 @@ class GeneralSolver(TangentialSolver):
         r = np.ascontiguousarray(r, dtype=float)
         iterations = restarts = 0
         while True:
-            q, delta, status, Tq, it, cg, code = _active_kernel.active_set(
+            q, delta, status, Tq, it, cg, code = _toeplitz.active_set(
                 lat.lat.tables, spec, m, lat.idx, lat.C, r, qmax, float(total), status.astype(np.int8), qtol, stol,
                 MAX_ACTIVE_SET * (restarts + 1) - iterations, CG_TOL, CG_ITERATIONS)
             iterations += it
             self.counters["cg_iterations"] += cg
-            if code == _active_kernel.CONVERGED or restarts == 3:
-                return q, delta, status, Tq, iterations, restarts + (code != _active_kernel.CONVERGED)
+            if code == _toeplitz.CONVERGED or restarts == 3:
+                return q, delta, status, Tq, iterations, restarts + (code != _toeplitz.CONVERGED)
             restarts += 1
             status = _projected_gradient(lat, n, r, qmax, total, q)
 
@@ -1249,9 +1248,9 @@ def _decision_tolerances(qmax, gscale, floor) -> tuple[float, float]:
 
 
 def _flips(q, s, status, qmax, gscale, floor):
-    """The active set's rule (_decision_tolerances, _active_kernel.flips): the stick cells over their bound and
+    """The active set's rule (_decision_tolerances, _toeplitz.flips): the stick cells over their bound and
     the slip cells whose increment s opposes their direction, as two masks."""
-    return _active_kernel.flips(np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(s, dtype=float),
+    return _toeplitz.flips(np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(s, dtype=float),
                                 np.ascontiguousarray(status, dtype=np.int8), qmax,
                                 *_decision_tolerances(qmax, gscale, floor))
 
