@@ -21,6 +21,7 @@ import argparse
 import dataclasses
 import math
 import platform
+import sys
 import textwrap
 import time
 from pathlib import Path
@@ -28,6 +29,12 @@ from pathlib import Path
 import numpy as np
 
 import halfslip as hs
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _doc import write_section  # noqa: E402
+
+#: this script's part of docs/benchmarks.md (the page's top; the other benchmarks write their sections below)
+BEGIN, END = "<!-- accuracy: begin -->", "<!-- accuracy: end -->"
 
 ROOT = Path(__file__).resolve().parents[1]
 E, NU, F = 200e9, 0.3, 0.6
@@ -333,7 +340,10 @@ FLOOR = 1e-13  # an edge error at or below this fraction of the width is roundin
 def read_tables(path):
     """The rows of a page this script wrote (to redraw it without rerunning)."""
     rows, steps = [], []
-    for line in Path(path).read_text().splitlines():
+    text = Path(path).read_text()
+    # its own part only: the other benchmarks' tables follow it (between their markers)
+    stop = text.find(END) if BEGIN in text else text.find("\n## The general solver on random histories")
+    for line in (text[:stop] if stop >= 0 else text).splitlines():
         cells = [c.strip() for c in line.strip().strip("|").split("|")]
         if not line.startswith("| ") or cells[0] == "scene" or set(cells[0]) <= {"-"}:
             continue
@@ -441,15 +451,17 @@ def write(rows, steps=()):
             lines.append(f"| {name} | {spc} | {nodes} | {1e3 * m['time']:.3g} | {m['edge']:.2e} | {m['D_err']:.2e} |")
         lines.append("")
     text = "\n".join(lines)
-    doc = ROOT / "docs" / "benchmarks.md"
-    # keep the section benchmarks/bench_general_random.py writes (it is measured separately)
-    begin, end = "<!-- general_random: begin -->", "<!-- general_random: end -->"
-    old = doc.read_text() if doc.exists() else ""
-    if begin in old and end in old:
-        text = (text.rstrip() + "\n\n## The general solver on random histories (issue 14)\n\n"
-                + old[old.index(begin):old.index(end) + len(end)] + "\n")
-    doc.write_text(text)
     print(text)
+    text = f"{BEGIN}\n{text.rstrip()}\n{END}"
+    doc = ROOT / "docs" / "benchmarks.md"
+    old = doc.read_text() if doc.exists() else ""
+    if BEGIN in old:
+        write_section(doc, BEGIN, END, text, "")
+        return
+    # the page as this script wrote it until 0.4.0, whole: keep the sections the other benchmarks write into
+    # it (random histories, examples, solve routes), which follow its own
+    rest = old.find("\n## The general solver on random histories")
+    doc.write_text(text + "\n" + (old[rest:] if rest >= 0 else ""))
 
 
 if __name__ == "__main__":
