@@ -910,9 +910,10 @@ def _reopen(status, qmax, total):  # pragma: no cover - compiled
 def active_set(tab, spec, m, idx, C, r, qmax, total, status, qtol, stol,
                max_iter, cg_tol, cg_max):  # pragma: no cover - compiled
     """Primal-dual active set for min 1/2 q^T T' q + q^T r, |q| <= qmax, sum q = total, from ``status``
-    (the module's docstring; T' = T + the end cells' columns C at the cells ``idx``, T by the circulant
-    (m, spec) of the n = r.size cells, ``tab`` the lattice's tables). Returns q, delta, the last pattern, T' q, the iterations, the CG
-    iterations and CONVERGED or REPEATED (a pattern came back, or ``max_iter`` iterations)."""
+    (the section's comment above; T' = T + the end cells' columns C at the cells ``idx``, T by the
+    circulant (m, spec) of the n = r.size cells, ``tab`` the lattice's tables). Returns q, delta, the last
+    pattern, T' q, the iterations, the CG iterations and CONVERGED or REPEATED (a pattern came back, or
+    ``max_iter`` iterations)."""
     n = r.size
     status = status.copy()
     seen = np.empty((max(max_iter, 1), n), np.int8)  # the patterns tried
