@@ -1,6 +1,6 @@
 """Run time against error for each method and resolution, on scenes with known answers.
 
-Run:  python benchmarks/bench_accuracy.py [--quick]   (the full run takes about half an hour)
+Run:  python benchmarks/bench_accuracy.py [--quick]   (the full run took 8 min in 0.4.0, half an hour in 0.3)
 Writes docs/benchmarks.md and docs/figures/pareto.png.
 
 Scenes (all answers from physics.md closed forms, the direct steady state, or
