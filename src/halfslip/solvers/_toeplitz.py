@@ -158,7 +158,6 @@ class ToeplitzLattice:
         B, eps = _levinson(self.t, self.size)
         if not eps[-1] > 0.0:
             raise ArithmeticError("the lattice kernel is not positive definite (datum too short)")
-        self._B, self._eps = B, eps
         self._circ: dict[int, tuple] = {}
         self._t_ext = self.t
         # the compiled solves' caches, direct-mapped per run length n (slot n mod SLOTS; the contact moves
@@ -285,16 +284,10 @@ def _xu(B, eps, n):  # pragma: no cover - compiled
 
 @numba.njit(cache=True)
 def _dense(B, eps, n):  # pragma: no cover - compiled
-    """T_n^-1, dense (n <= DENSE_CELLS), by the Gohberg-Semencul recursion (O(n^2), cheaper than a cache)."""
+    """T_n^-1, dense (n <= DENSE_CELLS): every column by the Gohberg-Semencul recursion (:func:`_next_columns`)
+    from the first, x (O(n^2), cheaper than a cache)."""
     x, u = _xu(B, eps, n)
-    out = np.empty((n, n))
-    for j in range(n):
-        out[0, j] = x[j]
-    for i in range(1, n):
-        out[i, 0] = x[i]
-        for j in range(1, n):
-            out[i, j] = out[i - 1, j - 1] + (x[i] * x[j] - u[i] * u[j]) / x[0]
-    return out
+    return _next_columns(x, u, x.reshape((n, 1)), np.zeros(1, np.int64), np.full(1, n, np.int64))
 
 
 @numba.njit(cache=True)

@@ -839,7 +839,7 @@ class GeneralSolver(TangentialSolver):
             return None
         k = len(sides)
         cols = np.stack(shapes + now, axis=1)[stick]
-        Y, cg = lat.solve_runs(_runs(stick), n, cols, ones=True)
+        Y, cg = lat.solve_runs(_run_bounds(stick), n, cols, ones=True)
         self.counters["cg_iterations"] += cg
         y0 = Y[:, 0]
         # the response of (q on the stick cells, delta) to a unit change of the locks along each column
