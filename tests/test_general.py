@@ -1399,3 +1399,69 @@ def test_kept_store_keeps_its_budget_and_its_contact():
     kept.put("c", (second,), 3, 40)  # 120 bytes: "a" goes
     assert kept.get("a", (first,)) is None and kept.get("b", (first,)) == 2 and kept.get("c", (second,)) == 3
     assert kept.size == 80
+
+
+def test_the_arrivals_sizes_match_the_lattice_and_the_pattern_together(monkeypatch):
+    """A Hertz contact that grows while part of it slips and the cells arriving at its edges stick (256 nodes,
+    P 1e5 -> 1.3e5, Q -0.3 f P -> -0.12 f P, a moment and a compressive bulk tension): at every take whose active set fitted the arrivals' sizes (0.4.1: in its own iterations),
+    the end state must satisfy what the sizes are defined by, checked here outside the compiled code:
+
+    * the lattice's displacement ARRIVAL_MATCH cells beyond the growing edge changes over the step by
+      size x the shape's change there (_displacement of the start and end shears, package datum), to 1e-9
+      of the displacement a cell's bound shear makes (A f max p h: the solves are exact to rounding, 3e-14 of
+      it seen; the equations' terms are up to 1e3 of it, and sizes 0.1 % off give 1.5e-3);
+    * the arrived cells that stick are locked at g0 + size x shape (g0 the displacement at the start);
+    * the step converged: its own check (Coulomb, slip direction, equilibrium) with those locks.
+    """
+    problem = NormalProblem(PROFILES["hertz"], A)
+    solver = GeneralSolver(problem, F, 256)
+    seen = []
+    fit_of, sizes_of = general_module.GeneralSolver._arrival_fit, general_module.GeneralSolver._active_set
+    take = general_module.GeneralSolver._take
+
+    def arrival_fit(self, mem, lat, h, loads0, loads1, path, x, known, g0, glock, r0):
+        out = fit_of(self, mem, lat, h, loads0, loads1, path, x, known, g0, glock, r0)
+        seen.append({"fit": out, "x": x, "known": known, "g0": g0, "glock": glock})
+        return out
+
+    def active_set(self, *args):
+        out = sizes_of(self, *args)
+        if args[-1] is not None:
+            seen[-1]["sizes"] = out[-1]
+        return out
+
+    def taking(self, mem, h, loads0, loads1, N1, path, load, hint=None):
+        count = len(seen)
+        out = take(self, mem, h, loads0, loads1, N1, path, load, hint)
+        if len(seen) > count:
+            seen[-1].update(mem=mem, out=out, h=h, loads0=loads0, loads1=loads1, N1=N1)
+        return out
+
+    monkeypatch.setattr(general_module.GeneralSolver, "_arrival_fit", arrival_fit)
+    monkeypatch.setattr(general_module.GeneralSolver, "_active_set", active_set)
+    monkeypatch.setattr(general_module.GeneralSolver, "_take", taking)
+    state = solver.initial_state()
+    state, report = solver.step(state, 1.0, Loads(1e5, -0.3 * F * 1e5, 0.0, 0.0))
+    state, report = solver.step(state, 2.0, Loads(1.3e5, -0.12 * F * 1.3e5, 6.5, -27e6))
+    assert report.converged and report.slipped
+    fitted = [s for s in seen if s.get("sizes")]
+    assert len(fitted) >= 3
+    for s in fitted:
+        side_of, now, phi, K, e, m1 = s["fit"]
+        mem, out, h, x = s["mem"], s["out"], s["h"], s["x"]
+        end = out.memory
+        scale = A * F * float(end.capacity.max()) * h
+        arrived = ~s["known"]
+        g0 = np.zeros(x.size)
+        g0[arrived] = s["g0"]
+        for j, size in s["sizes"]:
+            cells = np.flatnonzero(side_of == j)
+            side = -1 if cells[0] < x.size // 2 else 1
+            xe = np.array([x[0] - general_module.ARRIVAL_MATCH * h if side < 0
+                           else x[-1] + general_module.ARRIVAL_MATCH * h])
+            before = solver._displacement(mem.shift, mem.x, mem.q, mem.spacing, s["loads0"].sigma, xe, mem.normal)
+            after = solver._displacement(end.shift, end.x, end.q, h, s["loads1"].sigma, xe, s["N1"])
+            assert abs(after[0] - before[0] - size * m1[j]) <= 1e-9 * scale
+            stuck = cells[end.status[cells] == 0]
+            assert np.allclose(end.g[stuck], g0[stuck] + size * phi[j, stuck], rtol=0.0, atol=1e-9 * scale)
+        assert out.residual <= 1.0

@@ -61,7 +61,8 @@ def test_a_failed_step_is_stored_counted_and_summarised(monkeypatch, tmp_path):
         return original_step(self, *args)
 
     def perturbed_once(self, lat, n, r, qmax, total, status, *scales):
-        q, delta, pattern, Tq, iterations, restarts = original_solve(self, lat, n, r, qmax, total, status, *scales)
+        q, delta, pattern, Tq, iterations, restarts, sizes = original_solve(self, lat, n, r, qmax, total, status,
+                                                                            *scales)
         if lat.h == min(self._lattices):  # the fine lattice (the error estimate's shadow is twice as coarse)
             if seen["steps"] == 6:
                 stick = np.flatnonzero(pattern == 0)
@@ -69,7 +70,7 @@ def test_a_failed_step_is_stored_counted_and_summarised(monkeypatch, tmp_path):
                 q = q.copy()
                 q[cell] += 7.5 * CHECK_TOL * float(np.sum(qmax))  # h sum qmax = f P
                 seen["perturbed"] += 1
-        return q, delta, pattern, Tq, iterations, restarts
+        return q, delta, pattern, Tq, iterations, restarts, sizes
 
     monkeypatch.setattr(GeneralSolver, "step", counting_step)
     monkeypatch.setattr(GeneralSolver, "_active_set", perturbed_once)

@@ -101,8 +101,8 @@ class EdgePath:
         self.lam_lo = 0.0 if start is not None else max(0.0, P0 / (P0 - P1)) if P0 < P1 else 0.0
         self.solves = 0
         self._sides: dict[int, tuple] = {}
-        #: arrival integrals already taken along this step (GeneralSolver's _integrate): a re-take of the
-        #: step after the arrivals' fit asks for the same ones
+        #: arrival integrals already taken along this step (GeneralSolver's _integrate): another take of the
+        #: same step asks for the same ones
         self.integrals: dict[tuple, np.ndarray] = {}
         self._start: tuple[float, float] | None = None  # the edges at lam_lo
         self._symmetric = problem.profile.symmetric and loads0.M == 0.0 and loads1.M == 0.0

@@ -566,8 +566,9 @@ def _spd_solve(A, B):  # pragma: no cover - compiled
 
 @numba.njit(cache=True)
 def _lu_solve(A, B):  # pragma: no cover - compiled
-    """A^-1 B for the Woodbury capacitance (at most 2 x 2, not symmetric), and for a Schur complement whose
-    Cholesky factorisation failed: Gaussian elimination with partial pivoting."""
+    """A^-1 B for the Woodbury capacitance (at most 2 x 2, not symmetric), the arrivals' sizes (active_set),
+    and a Schur complement whose Cholesky factorisation failed: Gaussian elimination with partial pivoting;
+    NaN where A is singular."""
     n = A.shape[0]
     a = A.copy()
     x = B.copy()
@@ -581,6 +582,11 @@ def _lu_solve(A, B):  # pragma: no cover - compiled
                 a[c, j], a[p, j] = a[p, j], a[c, j]
             for j in range(x.shape[1]):
                 x[c, j], x[p, j] = x[p, j], x[c, j]
+        if a[c, c] == 0.0:  # singular: NaN (the caller checks), not numba's ZeroDivisionError
+            for i in range(n):
+                for j in range(x.shape[1]):
+                    x[i, j] = math.nan
+            return x
         for i in range(c + 1, n):
             f = a[i, c] / a[c, c]
             if f != 0.0:
@@ -901,13 +907,28 @@ def _reopen(status, qmax, total):  # pragma: no cover - compiled
 
 @numba.njit(cache=True)
 def active_set(tab, spec, m, idx, C, r, qmax, total, status, qtol, stol,
-               max_iter, cg_tol, cg_max):  # pragma: no cover - compiled
+               max_iter, cg_tol, cg_max, side_of, now, phi, K, e, m1):  # pragma: no cover - compiled
     """Primal-dual active set for min 1/2 q^T T' q + q^T r, |q| <= qmax, sum q = total, from ``status``
     (the section's comment above; T' = T + the end cells' columns C at the cells ``idx``, T by the
-    circulant (m, spec) of the n = r.size cells, ``tab`` the lattice's tables). Returns q, delta, the last
-    pattern, T' q, the iterations, the CG iterations and CONVERGED or REPEATED (a pattern came back, or
-    ``max_iter`` iterations)."""
+    circulant (m, spec) of the n = r.size cells, ``tab`` the lattice's tables), with the arrivals' sizes
+    found in the same iterations (below). Returns q, delta, the last pattern, T' q, the iterations, the CG
+    iterations, CONVERGED or REPEATED (a pattern came back, or ``max_iter`` iterations), the sizes and
+    which sides were fitted.
+
+    The arrivals (general.GeneralSolver._take): side j's arrived cells are those with side_of = j; r
+    holds their locks as M1 took them, of which ``now[j]`` is the increment. In an iteration whose
+    pattern has part of the contact slipping and some of side j's arrived cells sticking, that increment
+    becomes size_j phi[j] (the shape), with size_j such that the displacement at the match point,
+    delta + e_j - K_j q, is size_j m1_j (K_j: T' at that point, e_j its constants): one more unknown and
+    one more equation per fitted side, beside delta and equilibrium, for a pattern; the pattern and the
+    sizes are found together (until 0.4.1 a fit after the active set, and a take again where the sizes
+    changed the pattern). Where every arrived cell of a side slips, its locks stay M1's (fitted there, a
+    contact growing with slipping edges lost 1.9 % of its dissipation against the exact method) - until
+    a pattern comes back: the sized locks can make the arrived cells slip and M1's make them stick, and
+    from then on a side once fitted stays fitted (its size still set by the match; the take did that
+    before 0.4.1 by keeping the sizes of the round before)."""
     n = r.size
+    sides = m1.size
     status = status.copy()
     seen = np.empty((max(max_iter, 1), n), np.int8)  # the patterns tried
     count = 0
@@ -915,6 +936,11 @@ def active_set(tab, spec, m, idx, C, r, qmax, total, status, qtol, stol,
     cg_total = 0
     qz = np.empty(n)
     stick = np.empty(n, np.bool_)
+    reff = np.empty(n)
+    sizes = np.ones(sides)
+    fitted = np.zeros(sides, np.bool_)
+    usable = True  # False once a fit's system is singular: the sizes stay M1's
+    hold = False  # True once a pattern came back with sides switching: a fitted side stays fitted
     while True:
         iterations += 1
         free = 0
@@ -923,31 +949,96 @@ def active_set(tab, spec, m, idx, C, r, qmax, total, status, qtol, stol,
                 free += 1
         if free == 0:
             status = _reopen(status, qmax, total)
+            free = 1
+        if not hold or not usable:
+            for j in range(sides):
+                fitted[j] = False
+        if usable and free < n:
+            for i in range(n):
+                if side_of[i] >= 0 and status[i] == 0:
+                    fitted[side_of[i]] = True
+        act = np.empty(sides, np.int64)
+        ka = 0
+        for j in range(sides):
+            if fitted[j]:
+                act[ka] = j
+                ka += 1
         for i in range(n):
             stick[i] = status[i] == 0
             qz[i] = 0.0 if stick[i] else status[i] * qmax[i]
+            reff[i] = r[i]
+        for a in range(ka):
+            for i in range(n):
+                reff[i] -= now[act[a], i]
         runs = _run_bounds(stick)
         Tz = _end_matvec(spec, m, idx, C, qz)
         cells = _stick_cells(runs)
-        rhs = np.empty((cells.size, 1))
+        rhs = np.empty((cells.size, 1 + ka))
         for i in range(cells.size):
-            rhs[i, 0] = -(r[cells[i]] + Tz[cells[i]])
+            rhs[i, 0] = -(reff[cells[i]] + Tz[cells[i]])
+            for a in range(ka):
+                rhs[i, 1 + a] = phi[act[a], cells[i]]
         Y, cg = stick_solve(tab, spec, m, runs, n, idx, C, rhs, cg_tol, cg_max)
         cg_total += cg
-        rest, ones, part = total, 0.0, 0.0
+        rest = total
         for i in range(n):
             rest -= qz[i]
+        sums = np.zeros(2 + ka)
         for i in range(cells.size):
-            part += Y[i, 1]
-            ones += Y[i, 0]
-        delta = (rest - part) / ones
+            for c in range(2 + ka):
+                sums[c] += Y[i, c]
+        sol = np.zeros(1 + ka)  # delta, the sizes of the fitted sides
+        if ka > 0:
+            # equilibrium, then each fitted side's match: delta (1 - K y1) + sum_b size_b K y_b - size_a m1_a
+            # = K qz + K y_rhs - e_a
+            A = np.zeros((1 + ka, 1 + ka))
+            b = np.zeros((1 + ka, 1))
+            A[0, 0] = sums[0]
+            b[0, 0] = rest - sums[1]
+            for a in range(ka):
+                A[0, 1 + a] = -sums[2 + a]
+                j = act[a]
+                kq = 0.0
+                for i in range(n):
+                    kq += K[j, i] * qz[i]
+                ky = np.zeros(2 + ka)
+                for i in range(cells.size):
+                    kc = K[j, cells[i]]
+                    for c in range(2 + ka):
+                        ky[c] += kc * Y[i, c]
+                A[1 + a, 0] = 1.0 - ky[0]
+                for c in range(ka):
+                    A[1 + a, 1 + c] = ky[2 + c]
+                A[1 + a, 1 + a] -= m1[j]
+                b[1 + a, 0] = kq + ky[1] - e[j]
+            x = _lu_solve(A, b)
+            ok = True
+            for c in range(1 + ka):
+                ok = ok and math.isfinite(x[c, 0])
+            if not ok:  # the sizes are not determined by this pattern: M1's, from here on
+                usable = False
+                iterations -= 1
+                continue
+            for c in range(1 + ka):
+                sol[c] = x[c, 0]
+        else:
+            sol[0] = (rest - sums[1]) / sums[0]
+        delta = sol[0]
         q = qz.copy()
         for i in range(cells.size):
-            q[cells[i]] = delta * Y[i, 0] + Y[i, 1]
+            v = delta * Y[i, 0] + Y[i, 1]
+            for a in range(ka):
+                v -= sol[1 + a] * Y[i, 2 + a]
+            q[cells[i]] = v
         Tq = _end_matvec(spec, m, idx, C, q)
         s = np.empty(n)  # the slip increment g - g_lock (internal datum)
         for i in range(n):
-            s[i] = delta - Tq[i] - r[i]
+            s[i] = delta - Tq[i] - reff[i]
+        for a in range(ka):
+            j = act[a]
+            sizes[j] = sol[1 + a]
+            for i in range(n):
+                s[i] -= sol[1 + a] * phi[j, i]
         over, back = flips(q, s, status, qmax, qtol, stol)
         new = status.copy()
         same = True
@@ -959,14 +1050,17 @@ def active_set(tab, spec, m, idx, C, r, qmax, total, status, qtol, stol,
                 new[i] = 0
                 same = False
         if same:
-            return q, delta, status, Tq, iterations, cg_total, CONVERGED
+            return q, delta, status, Tq, iterations, cg_total, CONVERGED, sizes, fitted
         repeated = False
         for j in range(count):
             if np.array_equal(seen[j], new):
                 repeated = True
                 break
-        if repeated or iterations >= max_iter:
-            return q, delta, status, Tq, iterations, cg_total, REPEATED
+        if repeated and sides > 0 and not hold:
+            hold = True
+            count = 0
+        elif repeated or iterations >= max_iter:
+            return q, delta, status, Tq, iterations, cg_total, REPEATED, sizes, fitted
         seen[count] = new
         count += 1
         status = new

@@ -80,9 +80,6 @@ MAX_SUBSTEPS = 64
 #: displacements: the shape of M1's increments, their size from the lattice, _take; measured in
 #: docs/general_solver.md).
 ARRIVAL_CELLS = 8
-#: How many times a step is taken again when the fitted sizes change its stick-slip pattern (for a fixed
-#: pattern the fit is exact, _fit_arrivals; on the random histories a tenth of the fits change it).
-ARRIVAL_ROUNDS = 2
 #: How many cells beyond a growing edge the increments are matched to the lattice's own.
 ARRIVAL_MATCH = 3
 #: How near a whole number of cells (in cells) a point must be to count as a cell centre of the lattice, where
@@ -115,7 +112,7 @@ _EC_S, _EC_DS = _EC_T ** 3 * (10.0 - 15.0 * _EC_T + 6.0 * _EC_T ** 2), 30.0 * _E
 END_CELL_NEAR = 8
 END_CELL_TERMS = 20
 #: End cells and cell-load tables kept, per contact (NormalSolution) and spacing. A step asks for those of its
-#: fine and shadow lattices, their re-takes and the next step's start; a periodic history asks for the same
+#: fine and shadow lattices, its trial take and the next step's start; a periodic history asks for the same
 #: contacts again every cycle (the simulator keeps the normal solutions of its samples, simulator.contact_edges),
 #: so that what depends on the contact alone is found once per phase rather than once per step (the dovetail:
 #: 100 steps a cycle, 4 end cells and 2 tables a step, about 2 kB and 8 kB each at 1000 nodes).
@@ -604,14 +601,10 @@ class GeneralSolver(TangentialSolver):
         return lat
 
     def _take(self, mem: GeneralMemory, h: float, loads0: Loads, loads1: Loads,
-              N1: NormalSolution, path: EdgePath | None, load: _Load, hint=None, scale=None,
-              rounds: int = ARRIVAL_ROUNDS, g0: np.ndarray | None = None) -> _Outcome:
+              N1: NormalSolution, path: EdgePath | None, load: _Load, hint=None) -> _Outcome:
         """The step on the lattice of spacing ``h`` whose memory is ``mem``; ``hint`` = (first, status),
         where known, the pattern the active set starts from (the memory's otherwise: the solution is
-        unique, the start sets only how many iterations it takes); ``scale`` {side: size} of the arrivals'
-        increments at the growing edges (:meth:`_arrivals`), and ``rounds`` how many more times the sizes
-        may be found again from the lattice; ``g0`` the arrived cells' displacement at the step's start
-        where a take of the same step has it (a re-take after the fit)."""
+        unique, the start sets only how many iterations it takes)."""
         A, f = self.A, self.f
         first, n = _cells(N1.left, N1.right, h)
         x = (first + 0.5 + np.arange(n)) * h
@@ -645,10 +638,9 @@ class GeneralSolver(TangentialSolver):
             lo, hi = max(first, f0), min(first + n, f0 + guess.size)
             if hi > lo:
                 start[lo - first:hi - first] = guess[lo - f0:hi - f0]
+        g0 = None
         if not np.all(known):
-            glock[~known], g0 = self._arrivals(mem, loads0, loads1, N1, path, x[~known], scale, g0)
-        else:
-            g0 = None
+            glock[~known], g0 = self._arrivals(mem, loads0, loads1, N1, path, x[~known])
         sigma_term = 0.25 * A * loads1.sigma * x
         r = glock - sigma_term  # stick: (T q)_i - delta = -r_i
         qmax = f * cap
@@ -671,23 +663,18 @@ class GeneralSolver(TangentialSolver):
             r0 = 0.5 * (float(np.min(r)) + float(np.max(r)))
             gscale = A * float(qmax.max()) * h
             floor = ROUNDING * float(np.max(np.abs(r)))
-            q, delta_int, status, Tq, iterations, restarts = self._active_set(
-                lat, n, r - r0, qmax, loads1.Q / h, start, gscale, floor)
+            fit = None
+            if self.arrivals and old and g0 is not None and path is not None:
+                fit = self._arrival_fit(mem, lat, h, loads0, loads1, path, x, known, g0, glock, r0)
+            q, delta_int, status, Tq, iterations, restarts, sizes = self._active_set(
+                lat, n, r - r0, qmax, loads1.Q / h, start, gscale, floor, fit)
             delta_int += r0
             message = ""
-            if (self.arrivals and rounds > 0 and old and g0 is not None and path is not None
-                    and np.any(status == 0) and np.any(status != 0)):
-                # M1's increments are those of a fully stuck contact; part of this one slips. Keep their
-                # shape (that of a unit shear force) and size them, edge by edge, so that they give the
-                # lattice's own displacement change ARRIVAL_MATCH cells beyond the new edge
-                fit = self._fit_arrivals(mem, lat, h, loads0, loads1, path, x, known, g0, glock, status, q,
-                                         delta_int, sigma_term, qmax, gscale, floor)
-                if fit is not None and fit[0] is None:
-                    # the sizes change the pattern: take the step again with the arrivals so locked
-                    return self._take(mem, h, loads0, loads1, N1, path, load, (first, status), fit[1],
-                                      rounds - 1, g0)
-                if fit is not None:
-                    q, delta_int, Tq, glock = fit
+            if sizes is not None:
+                # the fitted sides' locks: their increments sized to the lattice (_arrival_fit)
+                glock = glock.copy()
+                for j, size in sizes:
+                    glock += size * fit[2][j] - fit[1][j]
         self.counters["iterations"] += iterations
         self.counters["restarts"] += restarts
         g = delta_int - Tq + sigma_term
@@ -743,47 +730,50 @@ class GeneralSolver(TangentialSolver):
                         message, slipping, placement)
 
     def _active_set(self, lat: "_EndCellLattice", n: int, r: np.ndarray, qmax: np.ndarray, total: float,
-                    status: np.ndarray, gscale: float, floor: float = 0.0):
+                    status: np.ndarray, gscale: float, floor: float = 0.0, fit=None):
         """Primal-dual active set for min 1/2 q^T T' q + q^T r, |q| <= qmax, sum q = total (compiled:
-        _toeplitz.active_set), restarted from the projected gradient's pattern when a pattern repeats.
+        _toeplitz.active_set), restarted from the projected gradient's pattern when a pattern repeats;
+        with ``fit`` (:meth:`_arrival_fit`), the arrivals' sizes found in the same iterations.
 
         Returns q, the internal shift delta (the equality's multiplier), the
-        final pattern, T' q, the iterations and the restarts.
+        final pattern, T' q, the iterations, the restarts and [(side index, size)] of the fitted sides
+        (None: none fitted).
         """
         m, spec = lat.lat._circulant(n)
         qtol, stol = _decision_tolerances(qmax, gscale, floor)
         r = np.ascontiguousarray(r, dtype=float)
+        side_of, now, phi, K, e, m1 = fit if fit is not None else _no_fit(n)
         iterations = restarts = 0
         while True:
-            q, delta, status, Tq, it, cg, code = _toeplitz.active_set(
+            q, delta, status, Tq, it, cg, code, sizes, fitted = _toeplitz.active_set(
                 lat.lat.tables, spec, m, lat.idx, lat.C, r, qmax, float(total), status.astype(np.int8), qtol, stol,
-                MAX_ACTIVE_SET * (restarts + 1) - iterations, CG_TOL, CG_ITERATIONS)
+                MAX_ACTIVE_SET * (restarts + 1) - iterations, CG_TOL, CG_ITERATIONS, side_of, now, phi, K, e, m1)
             iterations += it
             self.counters["cg_iterations"] += cg
             if code == _toeplitz.CONVERGED or restarts == 3:
-                return q, delta, status, Tq, iterations, restarts + (code != _toeplitz.CONVERGED)
+                found = [(j, float(sizes[j])) for j in range(m1.size) if fitted[j]]
+                return (q, delta, status, Tq, iterations, restarts + (code != _toeplitz.CONVERGED),
+                        found or None)
             restarts += 1
             status = _projected_gradient(lat, n, r, qmax, total, q)
 
     # -- arrivals ---------------------------------------------------------------
     def _arrivals(self, mem: GeneralMemory, loads0: Loads, loads1: Loads, N1: NormalSolution,
-                  path: EdgePath | None, xs: np.ndarray, scale: dict | None = None, g0: np.ndarray | None = None):
-        """Locked displacement of cells whose centres ``xs`` enter the contact during the step, and the
-        displacement they had at its start (None for a contact that forms in the step; ``g0`` when the
-        caller has it already); with ``scale`` {side: size}, the increments at that edge are
-        ARRIVAL_SHAPE's times the size (see :meth:`_take`)."""
+                  path: EdgePath | None, xs: np.ndarray):
+        """Locked displacement of cells whose centres ``xs`` enter the contact during the step (M1's: a fully
+        stuck contact's increments; :meth:`_arrival_fit` sizes them where part of the contact slips), and
+        the displacement they had at its start (None for a contact that forms in the step)."""
         A = self.A
         if path is None:
             path = EdgePath(self.problem, mem.normal, N1, loads0, loads1)
         out = np.empty(xs.size)
         if mem.normal is not None:
-            if g0 is None:  # the displacement at the start of the step, from the old shear
-                g0 = self._displacement(mem.shift, mem.x, mem.q, mem.spacing, loads0.sigma, xs, mem.normal)
+            # the displacement at the start of the step, from the old shear
+            g0 = self._displacement(mem.shift, mem.x, mem.q, mem.spacing, loads0.sigma, xs, mem.normal)
             for side, edge in ((-1, mem.normal.left), (1, mem.normal.right)):
                 mask = (xs < mem.normal.center) if side < 0 else (xs >= mem.normal.center)
                 if np.any(mask):
-                    size, shape = (scale[side], ARRIVAL_SHAPE) if scale and side in scale else (1.0, None)
-                    out[mask] = g0[mask] + size * side * _integrate(path, xs[mask], edge, side, A, None, shape)
+                    out[mask] = g0[mask] + side * _integrate(path, xs[mask], edge, side, A, None)
             return out, g0
         lam0 = path.lam_lo
         left, right = path.edges(np.array(lam0))
@@ -796,83 +786,60 @@ class GeneralSolver(TangentialSolver):
                 out[mask] = gf + side * _integrate(path, xs[mask], xf, side, A, (loads0, loads1))
         return out, None
 
-    def _fit_arrivals(self, mem, lat, h, loads0, loads1, path, x, known, g0, glock, status, q, delta, sigma_term,
-                      qmax, gscale, floor):
-        """Size the arrivals' increments to the lattice (:meth:`_take`), for the pattern ``status``.
+    def _arrival_fit(self, mem, lat, h, loads0, loads1, path, x, known, g0, glock, r0):
+        """What the active set needs to size the arrivals' increments to the lattice (_toeplitz.active_set),
+        or None where no edge grows.
 
-        At each growing edge where some arrived cell sticks, the locked
-        increments become size x ARRIVAL_SHAPE's, the size such that the
-        lattice's displacement ARRIVAL_MATCH cells beyond the new edge changes
-        over the step by size x the shape's change there. For a fixed pattern
-        the solution is affine in the sizes (one solve on the stick set with a
-        column per side for the shape and one for the increments now locked),
-        so the sizes come from a linear system of one or two equations.
+        M1's increments are those of a fully stuck contact. At a growing edge
+        where part of the contact slips and some arrived cells stick, the
+        locked increments become size x ARRIVAL_SHAPE's, the size such that
+        the lattice's displacement ARRIVAL_MATCH cells beyond the new edge
+        changes over the step by size x the shape's change there. For a given
+        pattern the solution is affine in the sizes: the active set solves for
+        them beside delta in each iteration, with the shape as one more column
+        of its stick-set solve.
 
-        Returns (q, delta, T q, locks) at those sizes when the pattern still
-        holds; (None, {side: size}) when it does not (the caller takes the step
-        again from the pattern); None when no edge is fitted.
+        Returns (side_of, now, phi, K, e, m1): per cell, the index of the fitted side it arrived at (-1:
+        none); per side, M1's increments on its arrived cells (now) and the shape's (phi), T' at the match
+        point (K: the kernel of each cell there, the end cells' shear over their supports; the lattice's
+        datum, whose terms cancel against delta's), the match point's constants (e: its bulk-tension
+        displacement and r0 less its displacement at the step's start) and the shape's change there (m1).
         """
         A = self.A
         n = x.size
         N0 = mem.normal
-        stick = status == 0
-        sides, shapes, now, match, m1 = [], [], [], [], []
+        side_of = np.full(n, -1, np.int64)
+        now, phi, K, e, m1 = [], [], [], [], []
+        t = None
         for side in (-1, 1):
             arrived = ~known & ((x < N0.center) if side < 0 else (x >= N0.center))
-            if not np.any(arrived) or not np.any(stick[arrived]):
-                continue  # nothing arrived there, or all of it slips: M1's own increments
+            if not np.any(arrived):
+                continue
             edge = N0.left if side < 0 else N0.right
             xe = np.array([x[0] - ARRIVAL_MATCH * h if side < 0 else x[-1] + ARRIVAL_MATCH * h])
             unit = side * float(_integrate(path, xe, edge, side, A, None, ARRIVAL_SHAPE)[0])
             if not (unit != 0.0 and math.isfinite(unit)):
                 continue
-            phi = np.zeros(n)
-            phi[arrived] = side * _integrate(path, x[arrived], edge, side, A, None, ARRIVAL_SHAPE)
+            shape = np.zeros(n)
+            shape[arrived] = side * _integrate(path, x[arrived], edge, side, A, None, ARRIVAL_SHAPE)
             cur = np.zeros(n)
             cur[arrived] = glock[arrived] - g0[arrived[~known]]
-            sides.append(side)
-            shapes.append(phi)
+            if t is None:
+                t = lat.lat._kernel_to(n + ARRIVAL_MATCH + 1)
+            offset = np.arange(n) + ARRIVAL_MATCH if side < 0 else (n - 1 + ARRIVAL_MATCH) - np.arange(n)
+            row = t[offset].copy()
+            ends = _end_supports(lat.normal, round(x[0] / h - 0.5), n, h)
+            row[[k for k, _, _ in ends]] += self._end_columns(lat.normal, round(x[0] / h - 0.5), h, ends, xe)[0]
+            before = self._displacement(mem.shift, mem.x, mem.q, mem.spacing, loads0.sigma, xe, mem.normal)[0]
+            side_of[arrived] = len(m1)
             now.append(cur)
-            match.append(xe)
+            phi.append(shape)
+            K.append(row)
+            e.append(r0 + 0.25 * A * loads1.sigma * float(xe[0]) - before)
             m1.append(unit)
-        if not sides:
+        if not m1:
             return None
-        k = len(sides)
-        cols = np.stack(shapes + now, axis=1)[stick]
-        Y, cg = lat.solve_runs(_run_bounds(stick), n, cols, ones=True)
-        self.counters["cg_iterations"] += cg
-        y0 = Y[:, 0]
-        # the response of (q on the stick cells, delta) to a unit change of the locks along each column
-        ddelta = Y[:, 1:].sum(axis=0) / y0.sum()
-        dq = ddelta[None, :] * y0[:, None] - Y[:, 1:]
-        xe = np.concatenate(match)
-        response = np.zeros((n, dq.shape[1]))
-        response[stick] = dq
-        # (sides, 2k): the matched displacements' response (the end cells' shear over their supports)
-        dmoved = ddelta[None, :] + self._displacement(0.0, x, response, h, 0.0, xe, lat.normal)
-        moved = self._displacement(self._shift(delta, q, h, lat), x, q, h, loads1.sigma, xe, lat.normal)
-        before = self._displacement(mem.shift, mem.x, mem.q, mem.spacing, loads0.sigma, xe, mem.normal)
-        # sides j: moved_j + sum_k size_k dmoved_jk(shape_k) - sum_k dmoved_jk(now_k) = before_j + size_j m1_j
-        M = dmoved[:, :k] - np.diag(m1)
-        rhs = before - moved + dmoved[:, k:].sum(axis=1)
-        try:
-            size = np.linalg.solve(M, rhs)
-        except np.linalg.LinAlgError:
-            return None
-        if not np.all(np.isfinite(size)):
-            return None
-        weights = np.concatenate((size, -np.ones(k)))
-        q = q.copy()
-        q[stick] += dq @ weights
-        delta = delta + float(ddelta @ weights)
-        glock = glock + np.stack(shapes, axis=1) @ size - np.stack(now, axis=1).sum(axis=1)
-        Tq = lat.matvec(q)
-        s = delta - Tq + sigma_term - glock
-        over, back = _flips(q, s, status, qmax, gscale, floor)
-        found = dict(zip(sides, size.tolist()))
-        if np.any(over) or np.any(back):
-            return None, found
-        return q, delta, Tq, glock
+        return side_of, np.array(now), np.array(phi), np.array(K), np.array(e), np.array(m1)
 
     def _leaving(self, mem, N1, first, n, shift, x, q, h, sigma1) -> float:
         """Dissipation of the cells that leave the contact during the step while slipping: the end state does
@@ -1177,8 +1144,8 @@ def _integrate(path: EdgePath, xs: np.ndarray, edge: float, side: int, A: float,
     plus the increments (which carry the rest of the bulk term, A sigma' / 4 in
     d(Delta-eps)/dlam: adding A sigma(lam_x) / 4 counted it twice).
 
-    Those of the stuck increments are kept on ``path`` (a re-take of the step after the arrivals' fit, and
-    the fit itself, ask for the same points again).
+    Those of the stuck increments are kept on ``path`` (the trial take and the sub-step that ends where it
+    does, and the fine and shadow lattices' takes of one sub-step, ask for the same points again).
     """
     key = None
     if formation is None:
@@ -1253,6 +1220,12 @@ def _flips(q, s, status, qmax, gscale, floor):
     return _toeplitz.flips(np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(s, dtype=float),
                                 np.ascontiguousarray(status, dtype=np.int8), qmax,
                                 *_decision_tolerances(qmax, gscale, floor))
+
+
+def _no_fit(n: int):
+    """The active set's arrival arguments when nothing is fitted (GeneralSolver._arrival_fit's form)."""
+    none = np.zeros((0, n))
+    return np.full(n, -1, np.int64), none, none, none, np.zeros(0), np.zeros(0)
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
@@ -1651,7 +1624,10 @@ class _EndCell:
         pressure ``p``, weights ``dxi``; ``px`` the pressure at x): p(x) int ln|x - xi| in closed form, plus
         the rest, (p(xi) - p(x)) ln|x - xi|, which vanishes at x like (xi - x) ln|xi - x|."""
         px *= self.scale
-        rest = np.log(np.abs(x - xi)) * (p * self.scale - px) * dxi
+        # a point of the rule at x to rounding (a piece of the cut rule shorter than rounding): the term's
+        # limit, 0 (its log was -inf, times 0: NaN, seen once in the property tests)
+        d = np.abs(x - xi)
+        rest = np.where(d > 0.0, np.log(np.where(d > 0.0, d, 1.0)), 0.0) * (p * self.scale - px) * dxi
         return float(px * (_g(x - self.a) - _g(x - self.b)) + np.sum(rest))
 
 
