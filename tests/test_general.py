@@ -1419,8 +1419,8 @@ def test_the_arrivals_sizes_match_the_lattice_and_the_pattern_together(monkeypat
     fit_of, sizes_of = general_module.GeneralSolver._arrival_fit, general_module.GeneralSolver._active_set
     take = general_module.GeneralSolver._take
 
-    def arrival_fit(self, mem, lat, h, loads0, loads1, path, x, known, g0, glock, r0):
-        out = fit_of(self, mem, lat, h, loads0, loads1, path, x, known, g0, glock, r0)
+    def arrival_fit(self, mem, lat, h, loads1, path, x, known, g0, before, glock, r0):
+        out = fit_of(self, mem, lat, h, loads1, path, x, known, g0, before, glock, r0)
         seen.append({"fit": out, "x": x, "known": known, "g0": g0, "glock": glock})
         return out
 

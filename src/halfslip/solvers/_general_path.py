@@ -284,18 +284,23 @@ def _hermite_gap(x, lam_x, back, side, h0, v0, dh, v1):  # pragma: no cover - co
 
 
 @numba.njit(cache=True)
-def _strain_sum(x, left, right, gl, gr, span, u, w, side_A, dQ, dS):  # pragma: no cover - compiled
-    """The arrival integral at each of ``x``, from the edges (n, k) at the nodes lam_x - span u^2 and
-    the gaps gl = x - left, gr = x - right there (see :func:`arrival_strains`)."""
-    out = np.zeros(x.size)
+def _strain_sum(x, left, right, gl, gr, span, u, w, side_A):  # pragma: no cover - compiled
+    """The arrival integral at each of ``x`` per unit Q' and per unit sigma' (columns 0 and 1: the integral is
+    linear in the two), from the edges (n, k) at the nodes lam_x - span u^2 and the gaps gl = x - left,
+    gr = x - right there (see :func:`arrival_strains`)."""
+    out = np.zeros((x.size, 2))
     for i in range(x.size):
-        tot = 0.0
+        tq = 0.0
+        ts = 0.0
         for j in range(u.size):
             root = math.sqrt(abs(gl[i, j] * gr[i, j]))
             if root > 0.0:
                 s = x[i] - 0.5 * (left[i, j] + right[i, j])
-                tot += 2.0 * span[i] * u[j] * w[j] / root * (dQ / math.pi + 0.25 * dS * s)
-        out[i] = side_A * tot
+                v = 2.0 * span[i] * u[j] * w[j] / root
+                tq += v / math.pi
+                ts += v * 0.25 * s
+        out[i, 0] = side_A * tq
+        out[i, 1] = side_A * ts
     return out
 
 
@@ -418,11 +423,17 @@ def arrival_strains(path: EdgePath, x: np.ndarray, side: int, compliance: float,
     ndarray, shape (n,)
         int A sgn(s)(Q'/pi + sigma' s/4) / sqrt(s^2 - d^2) dlam from lam_lo to lam_x.
     """
-    x = np.asarray(x, dtype=float)
-    if x.size == 0:
-        return np.zeros(0)
     l0, l1 = path.loads0, path.loads1
     dQ, dS = (l1.Q - l0.Q, l1.sigma - l0.sigma) if change is None else change
+    return arrival_strain_parts(path, x, side, compliance) @ np.array([dQ, dS], dtype=float)
+
+
+def arrival_strain_parts(path: EdgePath, x: np.ndarray, side: int, compliance: float) -> np.ndarray:
+    """:func:`arrival_strains` per unit Q' and per unit sigma', shape (n, 2): the strain of any (dQ, dsigma)
+    is their combination (one pass serves M1's increments and the arrivals' shape, a unit shear force)."""
+    x = np.asarray(x, dtype=float)
+    if x.size == 0:
+        return np.zeros((0, 2))
     lam_x = path.arrival(x, side)
     span = lam_x - path.lam_lo
     back = span[:, None] * _U**2
@@ -433,4 +444,4 @@ def arrival_strains(path: EdgePath, x: np.ndarray, side: int, compliance: float,
         (v0, dh, v1), h0, _ = path._side(side)
         gap = _hermite_gap(x, lam_x, back, side, h0, v0, dh, v1)
         gl, gr = (gap, gr) if side < 0 else (gl, gap)
-    return _strain_sum(x, left, right, gl, gr, span, _U, _W, compliance * side, dQ, dS)
+    return _strain_sum(x, left, right, gl, gr, span, _U, _W, compliance * side)

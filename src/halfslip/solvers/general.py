@@ -63,7 +63,7 @@ from .. import limits
 from ..geometry import NormalProblem, NormalSolution
 from ..state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime, StepReport
 from ..state import frozen as _frozen
-from ._general_path import EdgePath, arrival_strains
+from ._general_path import EdgePath, arrival_strain_parts
 from . import _toeplitz
 from ._toeplitz import ToeplitzLattice, _end_matvec, _G, _run_array, _run_bounds, kernel, stick_solve, table_products
 from .base import BACKWARD_SLIP, FORWARD_SLIP, OUT_OF_CONTACT, STICK, TangentialSolver
@@ -638,9 +638,9 @@ class GeneralSolver(TangentialSolver):
             lo, hi = max(first, f0), min(first + n, f0 + guess.size)
             if hi > lo:
                 start[lo - first:hi - first] = guess[lo - f0:hi - f0]
-        g0 = None
+        g0 = before = None
         if not np.all(known):
-            glock[~known], g0 = self._arrivals(mem, loads0, loads1, N1, path, x[~known])
+            glock[~known], g0, before = self._arrivals(mem, loads0, loads1, N1, path, x, known, h)
         sigma_term = 0.25 * A * loads1.sigma * x
         r = glock - sigma_term  # stick: (T q)_i - delta = -r_i
         qmax = f * cap
@@ -665,7 +665,7 @@ class GeneralSolver(TangentialSolver):
             floor = ROUNDING * float(np.max(np.abs(r)))
             fit = None
             if self.arrivals and old and g0 is not None and path is not None:
-                fit = self._arrival_fit(mem, lat, h, loads0, loads1, path, x, known, g0, glock, r0)
+                fit = self._arrival_fit(mem, lat, h, loads1, path, x, known, g0, before, glock, r0)
             q, delta_int, status, Tq, iterations, restarts, sizes = self._active_set(
                 lat, n, r - r0, qmax, loads1.Q / h, start, gscale, floor, fit)
             delta_int += r0
@@ -759,22 +759,30 @@ class GeneralSolver(TangentialSolver):
 
     # -- arrivals ---------------------------------------------------------------
     def _arrivals(self, mem: GeneralMemory, loads0: Loads, loads1: Loads, N1: NormalSolution,
-                  path: EdgePath | None, xs: np.ndarray):
-        """Locked displacement of cells whose centres ``xs`` enter the contact during the step (M1's: a fully
-        stuck contact's increments; :meth:`_arrival_fit` sizes them where part of the contact slips), and
-        the displacement they had at its start (None for a contact that forms in the step)."""
+                  path: EdgePath | None, x: np.ndarray, known: np.ndarray, h: float):
+        """Locked displacement of the cells centred at ``x`` that enter the contact during the step (those not
+        ``known``; M1's: a fully stuck contact's increments, :meth:`_arrival_fit` sizes them where part of
+        the contact slips), the displacement they had at its start, and that at the match point of each
+        growing side ({side: value}; both None for a contact that forms in the step). The integrals run on
+        to the match point (:func:`_match_points`), where the fit asks for them again."""
         A = self.A
         if path is None:
             path = EdgePath(self.problem, mem.normal, N1, loads0, loads1)
+        xs = x[~known]
         out = np.empty(xs.size)
         if mem.normal is not None:
-            # the displacement at the start of the step, from the old shear
-            g0 = self._displacement(mem.shift, mem.x, mem.q, mem.spacing, loads0.sigma, xs, mem.normal)
-            for side, edge in ((-1, mem.normal.left), (1, mem.normal.right)):
-                mask = (xs < mem.normal.center) if side < 0 else (xs >= mem.normal.center)
-                if np.any(mask):
-                    out[mask] = g0[mask] + side * _integrate(path, xs[mask], edge, side, A, None)
-            return out, g0
+            N0 = mem.normal
+            masks = {side: (xs < N0.center) if side < 0 else (xs >= N0.center) for side in (-1, 1)}
+            match = {side: xe for side, xe in _match_points(x, h).items() if np.any(masks[side])}
+            # the displacement at the start of the step, from the old shear, there and at the match points
+            at = np.concatenate([xs] + [np.array([xe]) for xe in match.values()])
+            start = self._displacement(mem.shift, mem.x, mem.q, mem.spacing, loads0.sigma, at, mem.normal)
+            g0 = start[:xs.size]
+            for side, xe in match.items():
+                edge = N0.left if side < 0 else N0.right
+                mask = masks[side]
+                out[mask] = g0[mask] + side * _integrate(path, np.append(xs[mask], xe), edge, side, A, None)[:-1]
+            return out, g0, dict(zip(match, start[xs.size:].tolist()))
         lam0 = path.lam_lo
         left, right = path.edges(np.array(lam0))
         xf = 0.5 * (float(left) + float(right))
@@ -784,9 +792,9 @@ class GeneralSolver(TangentialSolver):
             mask = (xs < xf) if side < 0 else (xs >= xf)
             if np.any(mask):
                 out[mask] = gf + side * _integrate(path, xs[mask], xf, side, A, (loads0, loads1))
-        return out, None
+        return out, None, None
 
-    def _arrival_fit(self, mem, lat, h, loads0, loads1, path, x, known, g0, glock, r0):
+    def _arrival_fit(self, mem, lat, h, loads1, path, x, known, g0, before, glock, r0):
         """What the active set needs to size the arrivals' increments to the lattice (_toeplitz.active_set),
         or None where no edge grows.
 
@@ -799,7 +807,8 @@ class GeneralSolver(TangentialSolver):
         them beside delta in each iteration, with the shape as one more column
         of its stick-set solve.
 
-        Returns (side_of, now, phi, K, e, m1): per cell, the index of the fitted side it arrived at (-1:
+        ``g0`` and ``before`` are the arrived cells' and the match points' displacements at the step's
+        start (:meth:`_arrivals`). Returns (side_of, now, phi, K, e, m1): per cell, the index of the fitted side it arrived at (-1:
         none); per side, M1's increments on its arrived cells (now) and the shape's (phi), T' at the match
         point (K: the kernel of each cell there, the end cells' shear over their supports; the lattice's
         datum, whose terms cancel against delta's), the match point's constants (e: its bulk-tension
@@ -811,31 +820,32 @@ class GeneralSolver(TangentialSolver):
         side_of = np.full(n, -1, np.int64)
         now, phi, K, e, m1 = [], [], [], [], []
         t = None
-        for side in (-1, 1):
+        for side, xe in _match_points(x, h).items():
             arrived = ~known & ((x < N0.center) if side < 0 else (x >= N0.center))
             if not np.any(arrived):
                 continue
             edge = N0.left if side < 0 else N0.right
-            xe = np.array([x[0] - ARRIVAL_MATCH * h if side < 0 else x[-1] + ARRIVAL_MATCH * h])
-            unit = side * float(_integrate(path, xe, edge, side, A, None, ARRIVAL_SHAPE)[0])
+            # the shape's increments at the arrived cells and the match point (the quadrature of _arrivals)
+            shaped = side * _integrate(path, np.append(x[arrived], xe), edge, side, A, None, ARRIVAL_SHAPE)
+            unit = float(shaped[-1])
             if not (unit != 0.0 and math.isfinite(unit)):
                 continue
             shape = np.zeros(n)
-            shape[arrived] = side * _integrate(path, x[arrived], edge, side, A, None, ARRIVAL_SHAPE)
+            shape[arrived] = shaped[:-1]
             cur = np.zeros(n)
             cur[arrived] = glock[arrived] - g0[arrived[~known]]
             if t is None:
                 t = lat.lat._kernel_to(n + ARRIVAL_MATCH + 1)
             offset = np.arange(n) + ARRIVAL_MATCH if side < 0 else (n - 1 + ARRIVAL_MATCH) - np.arange(n)
             row = t[offset].copy()
-            ends = _end_supports(lat.normal, round(x[0] / h - 0.5), n, h)
-            row[[k for k, _, _ in ends]] += self._end_columns(lat.normal, round(x[0] / h - 0.5), h, ends, xe)[0]
-            before = self._displacement(mem.shift, mem.x, mem.q, mem.spacing, loads0.sigma, xe, mem.normal)[0]
+            first = round(x[0] / h - 0.5)
+            ends = _end_supports(lat.normal, first, n, h)
+            row[[k for k, _, _ in ends]] += self._end_columns(lat.normal, first, h, ends, np.array([xe]))[0]
             side_of[arrived] = len(m1)
             now.append(cur)
             phi.append(shape)
             K.append(row)
-            e.append(r0 + 0.25 * A * loads1.sigma * float(xe[0]) - before)
+            e.append(r0 + 0.25 * A * loads1.sigma * xe - before[side])
             m1.append(unit)
         if not m1:
             return None
@@ -1112,7 +1122,9 @@ class _Load:
         part = (N.pressure(c - d * np.cos(t)) * d * np.sin(t)) @ _GL_W * span
         if extra.size:
             # the intervals next to a kink (and its grading): p is x ln x there, KINK_GAUSS points
-            near = np.isin(bounds[:-1], extra) | np.isin(bounds[1:], extra)
+            at = np.searchsorted(bounds, extra)  # extra's places among the bounds (all of them are there)
+            near = np.zeros(bounds.size - 1, bool)
+            near[at - 1] = near[np.minimum(at, bounds.size - 2)] = True
             near[:2] = near[-2:] = True
             tk = lo[near, None] + span[near, None] * _KINK_T[None, :]
             part[near] = (N.pressure(c - d * np.cos(tk)) * d * np.sin(tk)) @ _KINK_W * span[near]
@@ -1136,7 +1148,8 @@ class _Load:
 
 def _integrate(path: EdgePath, xs: np.ndarray, edge: float, side: int, A: float, formation,
                change=None) -> np.ndarray:
-    """int between ``edge`` and each of ``xs`` (outward on ``side``) of the arrival strain.
+    """int between ``edge`` and each of ``xs`` (outward on ``side``) of the arrival strain of the load change
+    ``change`` (dQ, dsigma; the path's own by default).
 
     Without ``formation``: the stuck increments only (their strain at the
     start is in g_0). With ``formation`` = (loads0, loads1): the whole strain
@@ -1144,31 +1157,31 @@ def _integrate(path: EdgePath, xs: np.ndarray, edge: float, side: int, A: float,
     plus the increments (which carry the rest of the bulk term, A sigma' / 4 in
     d(Delta-eps)/dlam: adding A sigma(lam_x) / 4 counted it twice).
 
-    Those of the stuck increments are kept on ``path`` (the trial take and the sub-step that ends where it
-    does, and the fine and shadow lattices' takes of one sub-step, ask for the same points again).
+    The integrals per unit Q' and sigma' (linear in the two) are kept on ``path``: M1's increments and the
+    arrivals' shape (a unit shear force) at the same points come from one quadrature, and the trial take,
+    the sub-step that ends where it does and the shadow's take of one sub-step ask for the same points again.
     """
-    key = None
-    if formation is None:
-        key = (xs.tobytes(), edge, side, A, change)
-        got = path.integrals.get(key)
-        if got is not None:
-            return got
-    order = np.argsort(side * xs)
-    xsorted = xs[order]
-    ends = np.concatenate(([edge], xsorted))
-    a, b = ends[:-1], ends[1:]
-    pts = a[:, None] + (b - a)[:, None] * _GL_T[None, :]
-    flat = pts.ravel()
-    inc = arrival_strains(path, flat, side, A, change)
+    key = (xs.tobytes(), edge, side, A)
+    parts = path.integrals.get(key)
+    if parts is None:
+        order = np.argsort(side * xs)
+        xsorted = xs[order]
+        ends = np.concatenate(([edge], xsorted))
+        a, b = ends[:-1], ends[1:]
+        pts = a[:, None] + (b - a)[:, None] * _GL_T[None, :]
+        inc = arrival_strain_parts(path, pts.ravel(), side, A)
+        seg = np.einsum("ijc,j->ic", inc.reshape(pts.shape + (2,)), _GL_W) * np.abs(b - a)[:, None]
+        parts = np.empty((xs.size, 3))
+        parts[order, :2] = np.cumsum(seg, axis=0)
+        parts[order, 2] = np.cumsum(np.abs(b - a))  # the distance from the edge, for a constant strain
+        parts.flags.writeable = False
+        path.integrals[key] = parts
+    l0, l1 = path.loads0, path.loads1
+    dQ, dS = (l1.Q - l0.Q, l1.sigma - l0.sigma) if change is None else change
+    out = dQ * parts[:, 0] + dS * parts[:, 1]
     if formation is not None:
         l0, l1 = formation
-        inc = inc + 0.25 * A * (l0.sigma + path.lam_lo * (l1.sigma - l0.sigma))
-    seg = (inc.reshape(pts.shape) @ _GL_W) * np.abs(b - a)
-    out = np.empty(xs.size)
-    out[order] = np.cumsum(seg)
-    if key is not None:
-        out.flags.writeable = False
-        path.integrals[key] = out
+        out = out + 0.25 * A * (l0.sigma + path.lam_lo * (l1.sigma - l0.sigma)) * parts[:, 2]
     return out
 
 
@@ -1220,6 +1233,12 @@ def _flips(q, s, status, qmax, gscale, floor):
     return _toeplitz.flips(np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(s, dtype=float),
                                 np.ascontiguousarray(status, dtype=np.int8), qmax,
                                 *_decision_tolerances(qmax, gscale, floor))
+
+
+def _match_points(x: np.ndarray, h: float) -> dict:
+    """{side: x}: the points ARRIVAL_MATCH cells beyond a take's first and last cell centres ``x``, where the
+    arrivals' increments are matched to the lattice (GeneralSolver._arrival_fit)."""
+    return {-1: float(x[0]) - ARRIVAL_MATCH * h, 1: float(x[-1]) + ARRIVAL_MATCH * h}
 
 
 def _no_fit(n: int):
