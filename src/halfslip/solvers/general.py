@@ -423,8 +423,10 @@ class GeneralSolver(TangentialSolver):
             # the active set starts from the sub-step's start pattern moved towards the whole step's end
             # pattern (the stick-slip boundaries travel steadily through a step): one iteration less
             hint = _toward(sub.memory, fine.memory, 1.0 / (pieces - k + 1))
+            # the last sub-step ends where the trial did: its normal solution is the trial's
             sub, rep, apart = self._single(sub, t0 + lam * (t1 - t0) if k < pieces else t1, at,
-                                           shadow_from.loads if shadow else None, hint)
+                                           shadow_from.loads if shadow else None, hint,
+                                           ctx.N1 if k == pieces else None)
             if shadow:
                 shadow_from = sub
                 spread = max(spread, apart)
@@ -478,9 +480,10 @@ class GeneralSolver(TangentialSolver):
         return pieces
 
     def _single(self, state: ContactState, t1: float, loads1: Loads,
-                shadow_from: Loads | None, hint=None) -> tuple[ContactState, StepReport, float]:
-        """One step, not subdivided; the shadow lattice steps from ``shadow_from`` (None: it waits). Returns
-        the state, the report and how far apart the two lattices' widest stick intervals are (/ W)."""
+                shadow_from: Loads | None, hint=None, normal=None) -> tuple[ContactState, StepReport, float]:
+        """One step, not subdivided; the shadow lattice steps from ``shadow_from`` (None: it waits); ``normal``
+        the normal solution at ``loads1`` where the caller has it. Returns the state, the report and how far
+        apart the two lattices' widest stick intervals are (/ W)."""
         loads0 = state.loads
         mem = state.memory
         if loads1 == loads0:
@@ -490,16 +493,18 @@ class GeneralSolver(TangentialSolver):
             return new, StepReport(regime, False, False, ""), 0.0
         if not loads1.P > 0.0:
             return *self._separate(state, t1, loads1), 0.0
-        ctx, fine = self._fine(state, loads1, hint)
+        ctx, fine = self._fine(state, loads1, hint, normal)
         return self._finish(state, t1, loads1, ctx, fine, shadow_from)
 
-    def _fine(self, state: ContactState, loads1: Loads, hint=None) -> tuple["_Context", "_Outcome"]:
-        """The normal solution at ``loads1`` and the step on the fine lattice (P1 > 0)."""
+    def _fine(self, state: ContactState, loads1: Loads, hint=None, normal=None) -> tuple["_Context", "_Outcome"]:
+        """The normal solution at ``loads1`` (``normal`` where the caller has it: the trial take's, for the
+        last sub-step; it keeps the cell loads and end cells found for it) and the step on the fine lattice
+        (P1 > 0)."""
         loads0 = state.loads
         mem = state.memory
         normal_changed = mem.normal is None or (loads1.P, loads1.M) != (loads0.P, loads0.M)
         if normal_changed:
-            N1 = self._normals.get((loads1.P, loads1.M))
+            N1 = normal if normal is not None else self._normals.get((loads1.P, loads1.M))
             if N1 is None:
                 # warm-started from the step's start (the loads of consecutive (sub-)steps are close)
                 N1 = self.problem.solve(loads1.P, loads1.M, near=mem.normal)
@@ -558,7 +563,7 @@ class GeneralSolver(TangentialSolver):
             path = ctx.path if shadow_from == loads0 else self._path(cmem.normal, N1, shadow_from, loads1)
             # its active set starts from the fine lattice's answer, coarsened (its own memory is a sub-step older)
             rough = self._take(cmem, cmem.spacing, shadow_from, loads1, N1, path, ctx.load,
-                               _coarsened(fine.memory))
+                               _coarsened(fine.memory), shadow=True)
             coarse = rough.memory
             error = max(_apart(a, b) for a, b in zip(fine.stick, rough.stick)) / W
             if fine.regime == Regime.PARTIAL_SLIP:
@@ -601,10 +606,11 @@ class GeneralSolver(TangentialSolver):
         return lat
 
     def _take(self, mem: GeneralMemory, h: float, loads0: Loads, loads1: Loads,
-              N1: NormalSolution, path: EdgePath | None, load: _Load, hint=None) -> _Outcome:
+              N1: NormalSolution, path: EdgePath | None, load: _Load, hint=None, shadow: bool = False) -> _Outcome:
         """The step on the lattice of spacing ``h`` whose memory is ``mem``; ``hint`` = (first, status),
         where known, the pattern the active set starts from (the memory's otherwise: the solution is
-        unique, the start sets only how many iterations it takes)."""
+        unique, the start sets only how many iterations it takes). The ``shadow`` lattice's take leaves out
+        the dissipation of the cells that leave (its dissipation is not used)."""
         A, f = self.A, self.f
         first, n = _cells(N1.left, N1.right, h)
         x = (first + 0.5 + np.arange(n)) * h
@@ -688,7 +694,7 @@ class GeneralSolver(TangentialSolver):
         s = np.where(stick, 0.0, s)
         dissipation = float(np.sum(f * 0.5 * (cap0 + cap)[slip] * np.abs(s[slip]))) * h
         shift = self._shift(delta_int, q, h, lat)
-        if old:
+        if old and not shadow:
             # cells that leave the contact during the step while slipping dissipate until they leave
             dissipation += self._leaving(mem, N1, first, n, shift, x, q, h, loads1.sigma)
         G = G + s
