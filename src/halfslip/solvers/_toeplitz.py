@@ -906,6 +906,39 @@ def _reopen(status, qmax, total):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
+def _sizes(Y, sums, rest, K, e, m1, act, qz, cells):  # pragma: no cover - compiled
+    """delta and the sizes of the fitted sides ``act`` (:func:`active_set`), from the stick-set solve Y = [y1,
+    y_rhs, y_phi...] (``sums`` its column sums; ``rest`` the force the stick cells carry): equilibrium, and
+    each side a's match, delta (1 - K_a y1) + sum_b size_b K_a y_b - size_a m1_a = K_a qz + K_a y_rhs - e_a.
+    NaN where the system is singular."""
+    ka = act.size
+    A = np.zeros((1 + ka, 1 + ka))
+    b = np.zeros((1 + ka, 1))
+    A[0, 0] = sums[0]
+    b[0, 0] = rest - sums[1]
+    ky = np.empty(2 + ka)
+    for a in range(ka):
+        A[0, 1 + a] = -sums[2 + a]
+        j = act[a]
+        kq = 0.0
+        for i in range(qz.size):
+            kq += K[j, i] * qz[i]
+        for c in range(2 + ka):
+            ky[c] = 0.0
+        for i in range(cells.size):
+            kc = K[j, cells[i]]
+            for c in range(2 + ka):
+                ky[c] += kc * Y[i, c]
+        A[1 + a, 0] = 1.0 - ky[0]
+        for c in range(ka):
+            A[1 + a, 1 + c] = ky[2 + c]
+        A[1 + a, 1 + a] -= m1[j]
+        b[1 + a, 0] = kq + ky[1] - e[j]
+    x = _lu_solve(A, b)
+    return x[:, 0].copy()
+
+
+@numba.njit(cache=True)
 def active_set(tab, spec, m, idx, C, r, qmax, total, status, qtol, stol,
                max_iter, cg_tol, cg_max, side_of, now, phi, K, e, m1):  # pragma: no cover - compiled
     """Primal-dual active set for min 1/2 q^T T' q + q^T r, |q| <= qmax, sum q = total, from ``status``
@@ -987,42 +1020,14 @@ def active_set(tab, spec, m, idx, C, r, qmax, total, status, qtol, stol,
         for i in range(cells.size):
             for c in range(2 + ka):
                 sums[c] += Y[i, c]
-        sol = np.zeros(1 + ka)  # delta, the sizes of the fitted sides
         if ka > 0:
-            # equilibrium, then each fitted side's match: delta (1 - K y1) + sum_b size_b K y_b - size_a m1_a
-            # = K qz + K y_rhs - e_a
-            A = np.zeros((1 + ka, 1 + ka))
-            b = np.zeros((1 + ka, 1))
-            A[0, 0] = sums[0]
-            b[0, 0] = rest - sums[1]
-            for a in range(ka):
-                A[0, 1 + a] = -sums[2 + a]
-                j = act[a]
-                kq = 0.0
-                for i in range(n):
-                    kq += K[j, i] * qz[i]
-                ky = np.zeros(2 + ka)
-                for i in range(cells.size):
-                    kc = K[j, cells[i]]
-                    for c in range(2 + ka):
-                        ky[c] += kc * Y[i, c]
-                A[1 + a, 0] = 1.0 - ky[0]
-                for c in range(ka):
-                    A[1 + a, 1 + c] = ky[2 + c]
-                A[1 + a, 1 + a] -= m1[j]
-                b[1 + a, 0] = kq + ky[1] - e[j]
-            x = _lu_solve(A, b)
-            ok = True
-            for c in range(1 + ka):
-                ok = ok and math.isfinite(x[c, 0])
-            if not ok:  # the sizes are not determined by this pattern: M1's, from here on
+            sol = _sizes(Y, sums, rest, K, e, m1, act[:ka], qz, cells)
+            if not math.isfinite(sol.sum()):  # the sizes are not determined by this pattern: M1's, from here on
                 usable = False
                 iterations -= 1
                 continue
-            for c in range(1 + ka):
-                sol[c] = x[c, 0]
         else:
-            sol[0] = (rest - sums[1]) / sums[0]
+            sol = np.full(1, (rest - sums[1]) / sums[0])
         delta = sol[0]
         q = qz.copy()
         for i in range(cells.size):

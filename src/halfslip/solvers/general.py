@@ -678,9 +678,10 @@ class GeneralSolver(TangentialSolver):
             message = ""
             if sizes is not None:
                 # the fitted sides' locks: their increments sized to the lattice (_arrival_fit)
+                _, now, shape, *_ = fit
                 glock = glock.copy()
                 for j, size in sizes:
-                    glock += size * fit[2][j] - fit[1][j]
+                    glock += size * shape[j] - now[j]
         self.counters["iterations"] += iterations
         self.counters["restarts"] += restarts
         g = delta_int - Tq + sigma_term
