@@ -1430,9 +1430,9 @@ def test_the_arrivals_sizes_match_the_lattice_and_the_pattern_together(monkeypat
             seen[-1]["sizes"] = out[-1]
         return out
 
-    def taking(self, mem, h, loads0, loads1, N1, path, load, hint=None):
+    def taking(self, mem, h, loads0, loads1, N1, path, load, hint=None, shadow=False):
         count = len(seen)
-        out = take(self, mem, h, loads0, loads1, N1, path, load, hint)
+        out = take(self, mem, h, loads0, loads1, N1, path, load, hint, shadow)
         if len(seen) > count:
             seen[-1].update(mem=mem, out=out, h=h, loads0=loads0, loads1=loads1, N1=N1)
         return out
