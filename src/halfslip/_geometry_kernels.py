@@ -186,3 +186,29 @@ def _moments_kernel(D, value, curvature, c2, d, slope_moments, curvature_moments
             for q in range(12):
                 curv[i, n] += curvature_moments[n, q] * C[q]
     return slope, curv, magnitude
+
+
+@numba.njit(cache=True)
+def _contact_moments(x0, d, breaks, lower, upper, coeffs, origins, slope_moments,
+                     curvature_moments):  # pragma: no cover - compiled
+    """geometry._chebyshev_moments of the one contact [x0 - d, x0 + d] in one call (its _piece_integrals
+    and _moments_from, the same operations): the slope moments (3,), the curvature moments (4,) and the
+    slope moments' magnitude (3,). The normal problem's Newton iteration asks for them at every trial
+    point, where the dozen numpy calls around the two kernels cost more than the kernels."""
+    left, right = x0 - d, x0 + d
+    first = np.searchsorted(breaks, left, side="right")
+    last = np.searchsorted(breaks, right, side="left") + 1
+    J = last - first
+    D = _cos_integrals(np.full(1, left), np.full(1, right), lower[first:last], upper[first:last])
+    value = np.empty((1, J))
+    curvature = np.empty((1, J))
+    c2 = np.empty((1, J))
+    for j in range(J):
+        e = x0 - origins[first + j]
+        a0, a1, a2 = coeffs[first + j, 0], coeffs[first + j, 1], coeffs[first + j, 2]
+        value[0, j] = a0 + e * (a1 + e * a2)
+        curvature[0, j] = a1 + 2.0 * e * a2
+        c2[0, j] = a2
+    slope, curv, magnitude = _moments_kernel(D, value, curvature, c2, np.full(1, d), slope_moments,
+                                             curvature_moments)
+    return slope[0], curv[0], magnitude[0]
