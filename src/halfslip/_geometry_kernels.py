@@ -212,3 +212,93 @@ def _contact_moments(x0, d, breaks, lower, upper, coeffs, origins, slope_moments
     slope, curv, magnitude = _moments_kernel(D, value, curvature, c2, np.full(1, d), slope_moments,
                                              curvature_moments)
     return slope[0], curv[0], magnitude[0]
+
+
+_EPS = float(np.finfo(np.float64).eps)
+
+
+@numba.njit(cache=True)
+def _contact_equations(x0, d, P, M, A, scale0, scale1, breaks, lower, upper, coeffs, origins, slope_moments,
+                       curvature_moments):  # pragma: no cover - compiled
+    """geometry._ContactEquations at (x0, d): the scaled residuals F (2,), their Jacobian in (x0, d) (2, 2)
+    and their rounding level (2,); ``scale0``, ``scale1`` the residuals' scales."""
+    slope, curv, mag = _contact_moments(x0, d, breaks, lower, upper, coeffs, origins, slope_moments,
+                                        curvature_moments)
+    I1, I2 = slope[1], slope[2]
+    K0, K1, K2, K3 = curv[0], curv[1], curv[2], curv[3]
+    F = np.empty(2)
+    J = np.empty((2, 2))
+    noise = np.empty(2)
+    F[0] = (d * I1 / A - P) / scale0
+    F[1] = (d * d * I2 / (2.0 * A) + P * x0 - M) / scale1
+    J[0, 0] = d * K1 / A / scale0
+    J[0, 1] = (I1 / A + d * (K0 + K2) / (2.0 * A)) / scale0
+    J[1, 0] = (d * d * K2 / (2.0 * A) + P) / scale1
+    J[1, 1] = (d * I2 / A + d * d * (K1 + K3) / (4.0 * A)) / scale1
+    terms0 = (d * mag[1] / A + P) / scale0
+    terms1 = (d * d * mag[2] / (2.0 * A) + P * abs(x0) + abs(M)) / scale1
+    noise[0] = 4.0 * _EPS * (terms0 + (abs(J[0, 0]) * abs(x0) + abs(J[0, 1]) * d))
+    noise[1] = 4.0 * _EPS * (terms1 + (abs(J[1, 0]) * abs(x0) + abs(J[1, 1]) * d))
+    return F, J, noise
+
+
+@numba.njit(cache=True)
+def _solve2(J, r0, r1):  # pragma: no cover - compiled
+    """J^-1 (r0, r1) for a 2 x 2 J by elimination with partial pivoting (as LAPACK's dgesv); ok False where a
+    pivot is exactly zero (np.linalg.solve's LinAlgError)."""
+    a, b, c, e = J[0, 0], J[0, 1], J[1, 0], J[1, 1]
+    if abs(c) > abs(a):
+        a, b, c, e = c, e, a, b
+        r0, r1 = r1, r0
+    if a == 0.0:
+        return False, 0.0, 0.0
+    f = c / a
+    u = e - f * b
+    if u == 0.0:
+        return False, 0.0, 0.0
+    y1 = (r1 - f * r0) / u
+    return True, (r0 - b * y1) / a, y1
+
+
+@numba.njit(cache=True)
+def _contact_newton(x0, d, P, M, A, tol, max_iter, scale0, scale1, breaks, lower, upper, coeffs, origins,
+                    slope_moments, curvature_moments):  # pragma: no cover - compiled
+    """geometry._solve_contact_equations' iteration from (x0, d): Newton on the contact equations, damped by
+    the natural monotonicity test (see there). Returns (converged, iterations, residual, x0, d)."""
+    F, J, noise = _contact_equations(x0, d, P, M, A, scale0, scale1, breaks, lower, upper, coeffs, origins,
+                                     slope_moments, curvature_moments)
+    iteration = 0
+    norm = math.inf
+    while True:
+        norm = max(abs(F[0]), abs(F[1]))
+        if abs(F[0]) <= max(tol, noise[0]) and abs(F[1]) <= max(tol, noise[1]):
+            return True, iteration, norm, x0, d
+        if iteration == max_iter:
+            break
+        ok, n0, n1 = _solve2(J, -F[0], -F[1])
+        if not ok:
+            break
+        size = max(abs(n0), abs(n1))
+        step = 1.0
+        accepted = False
+        x_try, d_try = x0, d
+        F_try, J_try, noise_try = F, J, noise
+        while step > 1e-10:
+            x_try, d_try = x0 + step * n0, d + step * n1
+            if d_try > 0.25 * d and abs(x_try - x0) <= 2.0 * d:
+                F_try, J_try, noise_try = _contact_equations(x_try, d_try, P, M, A, scale0, scale1, breaks, lower,
+                                                             upper, coeffs, origins, slope_moments,
+                                                             curvature_moments)
+                if abs(F_try[0]) <= max(tol, noise_try[0]) and abs(F_try[1]) <= max(tol, noise_try[1]):
+                    accepted = True  # converged; at rounding level the monotonicity test is noise
+                    break
+                ok, m0, m1 = _solve2(J, -F_try[0], -F_try[1])
+                if ok and max(abs(m0), abs(m1)) <= (1.0 - 0.25 * step) * size:
+                    accepted = True
+                    break
+            step *= 0.5
+        if not accepted:
+            break
+        x0, d, F, J, noise = x_try, d_try, F_try, J_try, noise_try
+        iteration += 1
+    return False, iteration, norm, x0, d

@@ -609,27 +609,19 @@ class _ContactEquations:
         The rounding level adds what rounding does to the terms of I_1 and
         I_2 and to the edge positions: near a kink of h'' the loads are so
         sensitive to an edge position that it can exceed any useful tolerance.
+        (Compiled: _geometry_kernels._contact_equations, which the Newton
+        iteration calls directly.)
         """
-        from ._geometry_kernels import _contact_moments
+        from ._geometry_kernels import _contact_equations
 
-        A, P, M = self.A, self.P, self.M
+        return _contact_equations(float(x0), float(d), *self.arguments())
+
+    def arguments(self) -> tuple:
+        """The compiled equations' arguments after (x0, d)."""
         pieces = self.pieces
-        slope, curvature, magnitude = _contact_moments(float(x0), float(d), pieces.breaks, pieces.lower, pieces.upper,
-                                                       pieces.coeffs, pieces.origins, _SLOPE_MOMENTS,
-                                                       _CURVATURE_MOMENTS)
-        _, I1, I2 = slope
-        K0, K1, K2, K3 = curvature
-        F = np.array([d * I1 / A - P, d * d * I2 / (2.0 * A) + P * x0 - M]) / self.scale
-        J = np.array(
-            [
-                [d * K1 / A, I1 / A + d * (K0 + K2) / (2.0 * A)],
-                [d * d * K2 / (2.0 * A) + P, d * I2 / A + d * d * (K1 + K3) / (4.0 * A)],
-            ]
-        ) / self.scale[:, None]
-        _, I1_mag, I2_mag = magnitude
-        terms = np.array([d * I1_mag / A + P, d * d * I2_mag / (2.0 * A) + P * abs(x0) + abs(M)]) / self.scale
-        noise = 4.0 * _EPS * (terms + np.abs(J) @ np.array([abs(x0), d]))
-        return F, J, noise
+        return (float(self.P), float(self.M), float(self.A), float(self.scale[0]), float(self.scale[1]),
+                pieces.breaks, pieces.lower, pieces.upper, pieces.coeffs, pieces.origins, _SLOPE_MOMENTS,
+                _CURVATURE_MOMENTS)
 
 
 def _half_width_at(
@@ -771,33 +763,12 @@ def _solve_contact_equations(
         d = _initial_half_width(pieces, A, P, x0, half_width_guess)
         if d is None:
             return _ContactIteration(False, 0, math.inf, x0, math.nan)
-    equations = _ContactEquations(pieces, A, P, M, d)
-    F, J, noise = equations(x0, d)
-    for iteration in range(max_iter + 1):
-        norm = float(np.max(np.abs(F)))
-        if np.all(np.abs(F) <= np.maximum(tol, noise)):
-            return _ContactIteration(True, iteration, norm, x0, d)
-        if iteration == max_iter:
-            break
-        try:
-            newton = np.linalg.solve(J, -F)
-        except np.linalg.LinAlgError:
-            break
-        size = np.max(np.abs(newton))
-        step = 1.0
-        while step > 1e-10:
-            x_try, d_try = x0 + step * newton[0], d + step * newton[1]
-            if d_try > 0.25 * d and abs(x_try - x0) <= 2.0 * d:
-                F_try, J_try, noise_try = equations(x_try, d_try)
-                if np.all(np.abs(F_try) <= np.maximum(tol, noise_try)):
-                    break  # converged; at rounding level the monotonicity test is noise
-                if np.max(np.abs(np.linalg.solve(J, -F_try))) <= (1.0 - 0.25 * step) * size:
-                    break
-            step *= 0.5
-        else:
-            break
-        x0, d, F, J, noise = x_try, d_try, F_try, J_try, noise_try
-    return _ContactIteration(False, iteration, norm, x0, d)
+    from ._geometry_kernels import _contact_newton
+
+    args = _ContactEquations(pieces, A, P, M, d).arguments()  # P, M, A, the scales, the pieces
+    converged, iterations, norm, x0, d = _contact_newton(float(x0), float(d), *args[:3], float(tol), int(max_iter),
+                                                         *args[3:])
+    return _ContactIteration(bool(converged), int(iterations), float(norm), float(x0), float(d))
 
 
 def _warm_contact(near: NormalSolution, P: float, M: float) -> tuple[float, float]:
