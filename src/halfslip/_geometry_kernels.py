@@ -189,6 +189,24 @@ def _moments_kernel(D, value, curvature, c2, d, slope_moments, curvature_moments
 
 
 @numba.njit(cache=True)
+def _piece_polynomials(center, origins, coeffs):  # pragma: no cover - compiled
+    """Per contact centre x0 and piece j (u = x0 - origins[j], coefficients ``coeffs[j]``): the piece's
+    polynomial extended to x0 (h'_j(x0)), its derivative there (h''_j(x0)) and h'''_j / 2, shapes (B, J)."""
+    B, J = center.size, origins.size
+    value = np.empty((B, J))
+    curvature = np.empty((B, J))
+    c2 = np.empty((B, J))
+    for b in range(B):
+        for j in range(J):
+            e = center[b] - origins[j]
+            a0, a1, a2 = coeffs[j, 0], coeffs[j, 1], coeffs[j, 2]
+            value[b, j] = a0 + e * (a1 + e * a2)
+            curvature[b, j] = a1 + 2.0 * e * a2
+            c2[b, j] = a2
+    return value, curvature, c2
+
+
+@numba.njit(cache=True)
 def _contact_moments(x0, d, breaks, lower, upper, coeffs, origins, slope_moments,
                      curvature_moments):  # pragma: no cover - compiled
     """geometry._chebyshev_moments of the one contact [x0 - d, x0 + d] in one call (its _piece_integrals
@@ -198,17 +216,8 @@ def _contact_moments(x0, d, breaks, lower, upper, coeffs, origins, slope_moments
     left, right = x0 - d, x0 + d
     first = np.searchsorted(breaks, left, side="right")
     last = np.searchsorted(breaks, right, side="left") + 1
-    J = last - first
     D = _cos_integrals(np.full(1, left), np.full(1, right), lower[first:last], upper[first:last])
-    value = np.empty((1, J))
-    curvature = np.empty((1, J))
-    c2 = np.empty((1, J))
-    for j in range(J):
-        e = x0 - origins[first + j]
-        a0, a1, a2 = coeffs[first + j, 0], coeffs[first + j, 1], coeffs[first + j, 2]
-        value[0, j] = a0 + e * (a1 + e * a2)
-        curvature[0, j] = a1 + 2.0 * e * a2
-        c2[0, j] = a2
+    value, curvature, c2 = _piece_polynomials(np.full(1, x0), origins[first:last], coeffs[first:last])
     slope, curv, magnitude = _moments_kernel(D, value, curvature, c2, np.full(1, d), slope_moments,
                                              curvature_moments)
     return slope[0], curv[0], magnitude[0]
@@ -261,7 +270,7 @@ def _solve2(J, r0, r1):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
-def _contact_newton(x0, d, P, M, A, tol, max_iter, scale0, scale1, breaks, lower, upper, coeffs, origins,
+def _contact_newton(x0, d, tol, max_iter, P, M, A, scale0, scale1, breaks, lower, upper, coeffs, origins,
                     slope_moments, curvature_moments):  # pragma: no cover - compiled
     """geometry._solve_contact_equations' iteration from (x0, d): Newton on the contact equations, damped by
     the natural monotonicity test (see there). Returns (converged, iterations, residual, x0, d)."""

@@ -409,7 +409,7 @@ def _piece_integrals(pieces: _SlopePieces, center: FloatArray, half_width: Float
     ``center`` and ``half_width`` have shape (B,); the J pieces used are those
     met by any contact of the batch.
     """
-    from ._geometry_kernels import _cos_integrals
+    from ._geometry_kernels import _cos_integrals, _piece_polynomials
 
     left, right = center - half_width, center + half_width
     first = np.searchsorted(pieces.breaks, left.min(), side="right")
@@ -417,12 +417,10 @@ def _piece_integrals(pieces: _SlopePieces, center: FloatArray, half_width: Float
     cos_integrals = _cos_integrals(np.ascontiguousarray(left, dtype=float), np.ascontiguousarray(right, dtype=float),
                                    np.ascontiguousarray(pieces.lower[first:last]),
                                    np.ascontiguousarray(pieces.upper[first:last]))
-    x0 = center[:, None]
-    c0, c1, c2 = pieces.coeffs[first:last].T
-    e = x0 - pieces.origins[first:last]
-    value = c0 + e * (c1 + e * c2)
-    curvature = c1 + 2.0 * e * c2
-    return _PieceIntegrals(cos_integrals, value, curvature, np.broadcast_to(c2, value.shape))
+    value, curvature, c2 = _piece_polynomials(np.ascontiguousarray(center, dtype=float),
+                                              np.ascontiguousarray(pieces.origins[first:last]),
+                                              np.ascontiguousarray(pieces.coeffs[first:last]))
+    return _PieceIntegrals(cos_integrals, value, curvature, c2)
 
 
 class _Moments(NamedTuple):
@@ -765,9 +763,8 @@ def _solve_contact_equations(
             return _ContactIteration(False, 0, math.inf, x0, math.nan)
     from ._geometry_kernels import _contact_newton
 
-    args = _ContactEquations(pieces, A, P, M, d).arguments()  # P, M, A, the scales, the pieces
-    converged, iterations, norm, x0, d = _contact_newton(float(x0), float(d), *args[:3], float(tol), int(max_iter),
-                                                         *args[3:])
+    converged, iterations, norm, x0, d = _contact_newton(float(x0), float(d), float(tol), int(max_iter),
+                                                         *_ContactEquations(pieces, A, P, M, d).arguments())
     return _ContactIteration(bool(converged), int(iterations), float(norm), float(x0), float(d))
 
 
@@ -1177,17 +1174,12 @@ class NormalProblem:
     def _separated(P: float, M: float) -> NormalSolution:
         return NormalSolution(P=P, M=M, left=0.0, right=0.0, rotation=0.0, separated=True)
 
-    def _solve_general(
-        self, P: float, M: float, half_width_guess: float | None = None, near: NormalSolution | None = None
-    ) -> NormalSolution:
-        """The general solver, for any profile (also those with closed forms, to test it on them)."""
+    def _solve_general(self, P: float, M: float, half_width_guess: float | None = None) -> NormalSolution:
+        """The general solver started cold, for any profile (also those with closed forms, to test it on them;
+        ``solve`` tries the warm start first)."""
         P, M = self._loads(P, M)
         if not P > 0.0:
             return self._separated(P, M)
-        if near is not None:
-            warm = self._solve_warm(P, M, near)
-            if warm is not None:
-                return warm
         result = _solve_contact_equations(
             self.profile, self.compliance, P, M, tol=self.tol, half_width_guess=half_width_guess
         )

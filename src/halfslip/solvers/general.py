@@ -826,7 +826,9 @@ class GeneralSolver(TangentialSolver):
         N0 = mem.normal
         side_of = np.full(n, -1, np.int64)
         now, phi, K, e, m1 = [], [], [], [], []
-        t = None
+        t = lat.lat._kernel_to(n + ARRIVAL_MATCH + 1)
+        first = round(x[0] / h - 0.5)
+        ends = _end_supports(lat.normal, first, n, h)
         for side, xe in _match_points(x, h).items():
             arrived = ~known & ((x < N0.center) if side < 0 else (x >= N0.center))
             if not np.any(arrived):
@@ -841,12 +843,8 @@ class GeneralSolver(TangentialSolver):
             shape[arrived] = shaped[:-1]
             cur = np.zeros(n)
             cur[arrived] = glock[arrived] - g0[arrived[~known]]
-            if t is None:
-                t = lat.lat._kernel_to(n + ARRIVAL_MATCH + 1)
             offset = np.arange(n) + ARRIVAL_MATCH if side < 0 else (n - 1 + ARRIVAL_MATCH) - np.arange(n)
             row = t[offset].copy()
-            first = round(x[0] / h - 0.5)
-            ends = _end_supports(lat.normal, first, n, h)
             row[[k for k, _, _ in ends]] += self._end_columns(lat.normal, first, h, ends, np.array([xe]))[0]
             side_of[arrived] = len(m1)
             now.append(cur)
@@ -1232,14 +1230,6 @@ def _decision_tolerances(qmax, gscale, floor) -> tuple[float, float]:
     increment, may go before the active set changes the cell (FLIP_TOL of f max p and of A f max p h, the
     slip never below ``floor``, the rounding of the locked displacements)."""
     return FLIP_TOL * float(qmax.max()), max(FLIP_TOL * gscale, floor)
-
-
-def _flips(q, s, status, qmax, gscale, floor):
-    """The active set's rule (_decision_tolerances, _toeplitz.flips): the stick cells over their bound and
-    the slip cells whose increment s opposes their direction, as two masks."""
-    return _toeplitz.flips(np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(s, dtype=float),
-                                np.ascontiguousarray(status, dtype=np.int8), qmax,
-                                *_decision_tolerances(qmax, gscale, floor))
 
 
 def _match_points(x: np.ndarray, h: float) -> dict:
@@ -1746,7 +1736,8 @@ class _EndCellLattice:
     pressure over their supports, :func:`_end_supports`; collocation stays at the cell centres, so T' is not
     symmetric): products, and solves on a stick set by Woodbury where an end cell sticks, with the
     correction columns as more right-hand sides of the lattice's own solve. Used as the ToeplitzLattice of
-    the take by the active set, the gross-sliding branch and the arrivals' fit."""
+    the take by the active set (which takes its tables, idx and C into the compiled iterations), the
+    gross-sliding branch and the arrivals' fit (the match points' columns)."""
 
     def __init__(self, lat: ToeplitzLattice, ends: list, columns: np.ndarray, normal):
         self.lat = lat
