@@ -403,10 +403,27 @@ class GeneralSolver(TangentialSolver):
         t1 = float(t1)
         if loads1 == state.loads or not loads1.P > 0.0:
             return self._single(state, t1, loads1, state.loads)[:2]
-        ctx, fine = self._fine(state, loads1)
-        pieces = self._pieces(state, ctx, fine)
-        if pieces <= 1:
-            return self._finish(state, t1, loads1, ctx, fine, state.loads)[:2]
+        ctx = self._context(state, loads1)
+        if self.estimate:
+            # the shadow lattice's take of the whole step decides the sub-steps: it is the shadow of a step
+            # that is not subdivided, and its active set costs a third of the fine one's (half the cells,
+            # and an iteration on its cells is a quarter of the fine one's at most)
+            rough = self._rough(state, loads1, ctx, state.loads, None)
+            pieces = self._pieces(state, ctx, rough)
+            end = _refined(rough.memory)
+            if pieces <= 1:
+                fine = self._take(state.memory, ctx.h, state.loads, loads1, ctx.N1, ctx.path, ctx.load, end)
+                # unless the fine lattice slips where the shadow did not (a slip within the shadow's cells) and
+                # that asks for sub-steps, this is the step
+                if not fine.slipped or rough.slipped or (pieces := self._pieces(state, ctx, fine)) <= 1:
+                    return self._finish(state, t1, loads1, ctx, fine, state.loads, rough)[:2]
+                end = (fine.memory.first, fine.memory.status)
+        else:
+            fine = self._take(state.memory, ctx.h, state.loads, loads1, ctx.N1, ctx.path, ctx.load)
+            pieces = self._pieces(state, ctx, fine)
+            if pieces <= 1:
+                return self._finish(state, t1, loads1, ctx, fine, state.loads)[:2]
+            end = (fine.memory.first, fine.memory.status)
         self.counters["substeps"] += pieces
         loads0, t0 = state.loads, state.t
         # a step from separation: the sub-steps share the part of the step in contact
@@ -421,8 +438,8 @@ class GeneralSolver(TangentialSolver):
             # in proportion to its cells, so that the estimate sees the arrivals' error as well
             shadow = k % 2 == 0 or k == pieces
             # the active set starts from the sub-step's start pattern moved towards the whole step's end
-            # pattern (the stick-slip boundaries travel steadily through a step): one iteration less
-            hint = _toward(sub.memory, fine.memory, 1.0 / (pieces - k + 1))
+            # pattern, the shadow's refined (the stick-slip boundaries travel steadily through a step)
+            hint = _toward(sub.memory, end, 1.0 / (pieces - k + 1))
             # the last sub-step ends where the trial did: its normal solution is the trial's
             sub, rep, apart = self._single(sub, t0 + lam * (t1 - t0) if k < pieces else t1, at,
                                            shadow_from.loads if shadow else None, hint,
@@ -444,8 +461,9 @@ class GeneralSolver(TangentialSolver):
                                error_estimate=_at_least(last.error_estimate, spread),
                                shear_error_estimate=last.shear_error_estimate)
 
-    def _pieces(self, state: ContactState, ctx: "_Context", fine: "_Outcome") -> int:
-        """Sub-steps for a step whose single solve is ``fine`` (1: keep it).
+    def _pieces(self, state: ContactState, ctx: "_Context", trial: "_Outcome") -> int:
+        """Sub-steps for a step whose single solve is ``trial`` (the shadow's, or the fine lattice's where
+        there is no shadow or it did not slip and the fine one did; 1: no sub-steps).
 
         * Arrivals while part of the contact slips: the arrivals' locked
           displacements come from the stuck increments (M1) of a fully stuck
@@ -464,17 +482,17 @@ class GeneralSolver(TangentialSolver):
           increments miss any slip on the way (a punch step from zero had a
           7 % interior slip zone that four sub-steps and the IC reference do not).
         """
-        if not fine.slipped:
+        if not trial.slipped:
             return 1
         N0, N1 = state.memory.normal, ctx.N1
         W = N1.right - N1.left
         moved = 1.0 if N0 is None else max(abs(N1.left - N0.left), abs(N1.right - N0.right)) / W
         pieces = math.ceil(moved / self.travel) if self.travel > 0.0 else 1
-        if self.stick_travel > 0.0 and fine.regime == Regime.PARTIAL_SLIP and np.isfinite(state.stick_left):
-            travelled = max(abs(fine.stick[0] - state.stick_left), abs(fine.stick[1] - state.stick_right)) / W
+        if self.stick_travel > 0.0 and trial.regime == Regime.PARTIAL_SLIP and np.isfinite(state.stick_left):
+            travelled = max(abs(trial.stick[0] - state.stick_left), abs(trial.stick[1] - state.stick_right)) / W
             pieces = max(pieces, math.ceil(travelled / self.stick_travel))
         pieces = min(MAX_SUBSTEPS, pieces)
-        if self.arrivals and fine.regime == Regime.PARTIAL_SLIP and N0 is not None:
+        if self.arrivals and trial.regime == Regime.PARTIAL_SLIP and N0 is not None:
             grew = max(N0.left - N1.left, N1.right - N0.right, 0.0) / ctx.h
             pieces = max(pieces, math.ceil(grew / ARRIVAL_CELLS))
         return pieces
@@ -497,9 +515,14 @@ class GeneralSolver(TangentialSolver):
         return self._finish(state, t1, loads1, ctx, fine, shadow_from)
 
     def _fine(self, state: ContactState, loads1: Loads, hint=None, normal=None) -> tuple["_Context", "_Outcome"]:
-        """The normal solution at ``loads1`` (``normal`` where the caller has it: the trial take's, for the
-        last sub-step; it keeps the cell loads and end cells found for it) and the step on the fine lattice
-        (P1 > 0)."""
+        """The step's context (:meth:`_context`) and its take on the fine lattice (P1 > 0)."""
+        ctx = self._context(state, loads1, normal)
+        return ctx, self._take(state.memory, ctx.h, state.loads, loads1, ctx.N1, ctx.path, ctx.load, hint)
+
+    def _context(self, state: ContactState, loads1: Loads, normal=None) -> "_Context":
+        """What both lattices of a step to ``loads1`` share (P1 > 0): the normal solution there (``normal`` where
+        the caller has it: the trial take's, for the last sub-step; it keeps the cell loads and end cells
+        found for it), the fine cell, the edge path and the cell loads."""
         loads0 = state.loads
         mem = state.memory
         normal_changed = mem.normal is None or (loads1.P, loads1.M) != (loads0.P, loads0.M)
@@ -518,8 +541,7 @@ class GeneralSolver(TangentialSolver):
         load = self._loads.get(h, (N1,))
         if load is None:
             load = self._loads.put(h, (N1,), _Load(N1, h, self._kinks, graded=self._graded_kinks))
-        ctx = _Context(N1, h, path, load, normal_changed)
-        return ctx, self._take(mem, h, loads0, loads1, N1, path, load, hint)
+        return _Context(N1, h, path, load, normal_changed)
 
     def _path(self, N0: NormalSolution | None, N1: NormalSolution, loads0: Loads, loads1: Loads):
         """The edge path of a step whose contact grows beyond ``N0`` (None otherwise)."""
@@ -534,9 +556,10 @@ class GeneralSolver(TangentialSolver):
         return path
 
     def _finish(self, state: ContactState, t1: float, loads1: Loads, ctx: "_Context", fine: "_Outcome",
-                shadow_from: Loads | None) -> tuple[ContactState, StepReport, float]:
-        """The shadow lattice's step (from ``shadow_from``), the error estimate, the new state and report,
-        and the distance of the two lattices' widest stick intervals (/ W; 0 without the shadow).
+                shadow_from: Loads | None, rough: "_Outcome | None" = None) -> tuple[ContactState, StepReport, float]:
+        """The shadow lattice's step (from ``shadow_from``; ``rough`` where the caller took it), the error
+        estimate, the new state and report, and the distance of the two lattices' widest stick intervals (/ W;
+        0 without the shadow).
 
         The estimate of the state is the distance of the two lattices' outermost
         stick points. A sub-stepped step reports the larger of it and the
@@ -557,13 +580,10 @@ class GeneralSolver(TangentialSolver):
         spread = 0.0
         coarse = mem.coarse
         if self.estimate and shadow_from is not None:
-            cmem = mem.coarse
-            if cmem is None or not math.isfinite(cmem.spacing):
-                cmem = _empty(2.0 * h, None, state.shift)
-            path = ctx.path if shadow_from == loads0 else self._path(cmem.normal, N1, shadow_from, loads1)
-            # its active set starts from the fine lattice's answer, coarsened (its own memory is a sub-step older)
-            rough = self._take(cmem, cmem.spacing, shadow_from, loads1, N1, path, ctx.load,
-                               _coarsened(fine.memory), shadow=True)
+            if rough is None:
+                # its active set starts from the fine lattice's answer, coarsened (its own memory is a sub-step
+                # older)
+                rough = self._rough(state, loads1, ctx, shadow_from, _coarsened(fine.memory))
             coarse = rough.memory
             error = max(_apart(a, b) for a, b in zip(fine.stick, rough.stick)) / W
             if fine.regime == Regime.PARTIAL_SLIP:
@@ -589,6 +609,16 @@ class GeneralSolver(TangentialSolver):
         return new, StepReport(fine.regime, fine.slipped, ctx.normal_changed, message, converged=converged,
                                residual=fine.residual, iterations=fine.iterations, error_estimate=error,
                                shear_error_estimate=shear), spread
+
+    def _rough(self, state: ContactState, loads1: Loads, ctx: "_Context", shadow_from: Loads, hint) -> "_Outcome":
+        """The shadow lattice's take to ``loads1`` (the end of ``ctx``) from its memory at ``shadow_from``
+        (``state``'s shadow: the loads of the fine state it was last taken with), its active set starting
+        from ``hint`` (None: its own pattern)."""
+        cmem = state.memory.coarse
+        if cmem is None or not math.isfinite(cmem.spacing):
+            cmem = _empty(2.0 * ctx.h, None, state.shift)
+        path = ctx.path if shadow_from == state.loads else self._path(cmem.normal, ctx.N1, shadow_from, loads1)
+        return self._take(cmem, cmem.spacing, shadow_from, loads1, ctx.N1, path, ctx.load, hint, shadow=True)
 
     # -- one lattice ----------------------------------------------------------
     def _lattice(self, h: float, n: int) -> ToeplitzLattice:
@@ -1190,20 +1220,20 @@ def _integrate(path: EdgePath, xs: np.ndarray, edge: float, side: int, A: float,
     return out
 
 
-def _toward(now: GeneralMemory, end: GeneralMemory, fraction: float):
-    """(first, status) over ``end``'s cells: on the cells ``now`` holds too, its pattern with
-    ``fraction`` of the way to ``end``'s taken; on the cells that arrive, ``end``'s (None when the two
-    share no cell). Each run of cells whose status differs lies between a boundary of ``now`` and its
-    place in ``end``; it flips from the side where ``now`` already has the run's end status, the
-    nearest cells first (no side: it is left as it is)."""
-    if now.normal is None or end.normal is None or now.spacing != end.spacing:
+def _toward(now: GeneralMemory, end, fraction: float):
+    """(first, status) over the cells of ``end`` = (first, status) on ``now``'s lattice: on the cells ``now``
+    holds too, its pattern with ``fraction`` of the way to ``end``'s taken; on the cells that arrive,
+    ``end``'s (None when ``end`` is None or the two share no cell). Each run of cells whose status differs
+    lies between a boundary of ``now`` and its place in ``end``; it flips from the side where ``now``
+    already has the run's end status, the nearest cells first (no side: it is left as it is)."""
+    if now.normal is None or end is None:
         return None
-    lo, hi = max(now.first, end.first), min(now.first + now.q.size, end.first + end.q.size)
+    first, e = end
+    lo, hi = max(now.first, first), min(now.first + now.q.size, first + e.size)
     if hi <= lo:
         return None
-    s = end.status.copy()  # cells that arrive: as at the end
-    s[lo - end.first:hi - end.first] = now.status[lo - now.first:hi - now.first]
-    e = end.status
+    s = e.copy()  # cells that arrive: as at the end
+    s[lo - first:hi - first] = now.status[lo - now.first:hi - now.first]
     for a, b in _runs(s != e):
         count = int(round(fraction * (b - a)))
         if count == 0:
@@ -1212,7 +1242,15 @@ def _toward(now: GeneralMemory, end: GeneralMemory, fraction: float):
             s[a:a + count] = e[a:a + count]
         elif b < s.size and s[b] == e[b - 1]:
             s[b - count:b] = e[b - count:b]
-    return end.first, s
+    return first, s
+
+
+def _refined(coarse: GeneralMemory):
+    """(first, status) of the shadow's pattern ``coarse`` on the fine lattice (half its cell): fine cells 2c
+    and 2c + 1 take coarse cell c's status (the inverse of :func:`_coarsened`); None out of contact."""
+    if coarse.normal is None:
+        return None
+    return 2 * coarse.first, np.repeat(coarse.status, 2)
 
 
 def _coarsened(fine: GeneralMemory):
