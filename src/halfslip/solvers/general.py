@@ -402,13 +402,13 @@ class GeneralSolver(TangentialSolver):
         loads1 = Loads(*(float(v) for v in loads1))
         t1 = float(t1)
         if loads1 == state.loads or not loads1.P > 0.0:
-            return self._single(state, t1, loads1, state.loads)[:2]
+            return self._single(state, t1, loads1, None)[:2]
         ctx = self._context(state, loads1)
+        rough = end = None
         if self.estimate:
-            # the shadow lattice's take of the whole step decides the sub-steps: it is the shadow of a step
-            # that is not subdivided, and its active set costs a third of the fine one's (half the cells,
-            # and an iteration on its cells is a quarter of the fine one's at most)
-            rough = self._rough(state, loads1, ctx, state.loads, None)
+            # the shadow lattice (twice the cell) takes the whole step: its answer decides the sub-steps, the
+            # fine takes start from its pattern, and the error estimate compares it with the fine end state
+            rough = self._rough(state, loads1, ctx)
             pieces = self._pieces(state, ctx, rough)
             end = _refined(rough.memory)
             if pieces <= 1:
@@ -416,37 +416,31 @@ class GeneralSolver(TangentialSolver):
                 # unless the fine lattice slips where the shadow did not (a slip within the shadow's cells) and
                 # that asks for sub-steps, this is the step
                 if not fine.slipped or rough.slipped or (pieces := self._pieces(state, ctx, fine)) <= 1:
-                    return self._finish(state, t1, loads1, ctx, fine, state.loads, rough)[:2]
+                    return self._finish(state, t1, loads1, ctx, fine, rough)[:2]
                 end = (fine.memory.first, fine.memory.status)
         else:
             fine = self._take(state.memory, ctx.h, state.loads, loads1, ctx.N1, ctx.path, ctx.load)
             pieces = self._pieces(state, ctx, fine)
             if pieces <= 1:
-                return self._finish(state, t1, loads1, ctx, fine, state.loads)[:2]
+                return self._finish(state, t1, loads1, ctx, fine, None)[:2]
             end = (fine.memory.first, fine.memory.status)
         self.counters["substeps"] += pieces
         loads0, t0 = state.loads, state.t
         # a step from separation: the sub-steps share the part of the step in contact
         lo = 0.0 if state.memory.normal is not None or loads0.P >= 0.0 else loads0.P / (loads0.P - loads1.P)
         reports = []
-        spread = 0.0
-        sub = shadow_from = state
+        sub = state
         for k in range(1, pieces + 1):
             lam = lo + (1.0 - lo) * k / pieces
             at = Loads(*(a + lam * (b - a) for a, b in zip(loads0, loads1))) if k < pieces else loads1
-            # the shadow lattice (twice the cell) takes every other sub-step: its arrivals are resolved
-            # in proportion to its cells, so that the estimate sees the arrivals' error as well
-            shadow = k % 2 == 0 or k == pieces
             # the active set starts from the sub-step's start pattern moved towards the whole step's end
-            # pattern, the shadow's refined (the stick-slip boundaries travel steadily through a step)
+            # pattern (the stick-slip boundaries travel steadily through a step)
             hint = _toward(sub.memory, end, 1.0 / (pieces - k + 1))
-            # the last sub-step ends where the trial did: its normal solution is the trial's
-            sub, rep, apart = self._single(sub, t0 + lam * (t1 - t0) if k < pieces else t1, at,
-                                           shadow_from.loads if shadow else None, hint,
-                                           ctx.N1 if k == pieces else None)
-            if shadow:
-                shadow_from = sub
-                spread = max(spread, apart)
+            # the last sub-step ends where the whole step does: its normal solution is the step's, and the
+            # shadow's take of the whole step is its shadow
+            last = k == pieces
+            sub, rep, apart = self._single(sub, t0 + lam * (t1 - t0) if not last else t1, at,
+                                           rough if last else None, hint, ctx.N1 if last else None)
             reports.append(rep)
         last = reports[-1]
         # the gross-sliding and separation messages speak of the step's end loads (a sub-step may slide or be
@@ -458,7 +452,7 @@ class GeneralSolver(TangentialSolver):
                                converged=all(r.converged for r in reports),
                                residual=max(r.residual for r in reports),
                                iterations=sum(r.iterations for r in reports),
-                               error_estimate=_at_least(last.error_estimate, spread),
+                               error_estimate=_at_least(last.error_estimate, apart),
                                shear_error_estimate=last.shear_error_estimate)
 
     def _pieces(self, state: ContactState, ctx: "_Context", trial: "_Outcome") -> int:
@@ -497,11 +491,11 @@ class GeneralSolver(TangentialSolver):
             pieces = max(pieces, math.ceil(grew / ARRIVAL_CELLS))
         return pieces
 
-    def _single(self, state: ContactState, t1: float, loads1: Loads,
-                shadow_from: Loads | None, hint=None, normal=None) -> tuple[ContactState, StepReport, float]:
-        """One step, not subdivided; the shadow lattice steps from ``shadow_from`` (None: it waits); ``normal``
-        the normal solution at ``loads1`` where the caller has it. Returns the state, the report and how far
-        apart the two lattices' widest stick intervals are (/ W)."""
+    def _single(self, state: ContactState, t1: float, loads1: Loads, rough: "_Outcome | None", hint=None,
+                normal=None) -> tuple[ContactState, StepReport, float]:
+        """One step, not subdivided; ``rough`` the shadow lattice's take to ``loads1`` (None: the shadow waits);
+        ``normal`` the normal solution at ``loads1`` where the caller has it. Returns the state, the report and
+        how far apart the two lattices' widest stick intervals are (/ W)."""
         loads0 = state.loads
         mem = state.memory
         if loads1 == loads0:
@@ -512,7 +506,7 @@ class GeneralSolver(TangentialSolver):
         if not loads1.P > 0.0:
             return *self._separate(state, t1, loads1), 0.0
         ctx, fine = self._fine(state, loads1, hint, normal)
-        return self._finish(state, t1, loads1, ctx, fine, shadow_from)
+        return self._finish(state, t1, loads1, ctx, fine, rough)
 
     def _fine(self, state: ContactState, loads1: Loads, hint=None, normal=None) -> tuple["_Context", "_Outcome"]:
         """The step's context (:meth:`_context`) and its take on the fine lattice (P1 > 0)."""
@@ -556,34 +550,30 @@ class GeneralSolver(TangentialSolver):
         return path
 
     def _finish(self, state: ContactState, t1: float, loads1: Loads, ctx: "_Context", fine: "_Outcome",
-                shadow_from: Loads | None, rough: "_Outcome | None" = None) -> tuple[ContactState, StepReport, float]:
-        """The shadow lattice's step (from ``shadow_from``; ``rough`` where the caller took it), the error
-        estimate, the new state and report, and the distance of the two lattices' widest stick intervals (/ W;
-        0 without the shadow).
+                rough: "_Outcome | None") -> tuple[ContactState, StepReport, float]:
+        """The error estimate against the shadow lattice's take ``rough`` of the step (None: no estimate, the
+        shadow memory stays), the new state and report, and the distance of the two lattices' widest stick
+        intervals (/ W; 0 without the shadow).
 
         The estimate of the state is the distance of the two lattices' outermost
         stick points. A sub-stepped step reports the larger of it and the
-        largest distance of the widest intervals over its sub-steps: the
-        edges sweep through their cells, and where they fall in a cell sets
-        their error (0.1-0.25 of a cell), so the two lattices can agree by
-        chance at the end (J1 at 256 nodes: error 3.9e-4 of W, end estimate
-        5.7e-5); the widest intervals, not the outermost points, because stick
-        islands of a cell or two at an advancing edge come and go between
-        sub-steps (the outermost distance reached 0.24 of W in sub-steps whose
-        end states agree to 1e-4).
+        distance of the widest intervals: the widest intervals, not only the
+        outermost points, because stick islands of a cell or two at an
+        advancing edge come and go between sub-steps. Until 0.4.1 the shadow
+        took every other sub-step and the largest distance of the widest
+        intervals over them counted (the edges sweep through their cells, and
+        the lattices can agree by chance at the end: J1 at 256 nodes, error
+        3.9e-4 of W, end distance 5.7e-5; the floor EDGE_PLACEMENT stands for
+        that since 0.3.2); since 0.4.2 the shadow takes the whole step in one,
+        the take that decides the sub-steps (:meth:`step`).
         """
-        loads0 = state.loads
         mem = state.memory
         N1, h = ctx.N1, ctx.h
         W = N1.right - N1.left
         error = shear = math.nan
         spread = 0.0
         coarse = mem.coarse
-        if self.estimate and shadow_from is not None:
-            if rough is None:
-                # its active set starts from the fine lattice's answer, coarsened (its own memory is a sub-step
-                # older)
-                rough = self._rough(state, loads1, ctx, shadow_from, _coarsened(fine.memory))
+        if rough is not None:
             coarse = rough.memory
             error = max(_apart(a, b) for a, b in zip(fine.stick, rough.stick)) / W
             if fine.regime == Regime.PARTIAL_SLIP:
@@ -610,15 +600,13 @@ class GeneralSolver(TangentialSolver):
                                residual=fine.residual, iterations=fine.iterations, error_estimate=error,
                                shear_error_estimate=shear), spread
 
-    def _rough(self, state: ContactState, loads1: Loads, ctx: "_Context", shadow_from: Loads, hint) -> "_Outcome":
-        """The shadow lattice's take to ``loads1`` (the end of ``ctx``) from its memory at ``shadow_from``
-        (``state``'s shadow: the loads of the fine state it was last taken with), its active set starting
-        from ``hint`` (None: its own pattern)."""
+    def _rough(self, state: ContactState, loads1: Loads, ctx: "_Context") -> "_Outcome":
+        """The shadow lattice's take of the whole step from ``state`` to ``loads1`` (the end of ``ctx``), from
+        the shadow memory ``state`` carries, its active set starting from its own pattern."""
         cmem = state.memory.coarse
         if cmem is None or not math.isfinite(cmem.spacing):
             cmem = _empty(2.0 * ctx.h, None, state.shift)
-        path = ctx.path if shadow_from == state.loads else self._path(cmem.normal, ctx.N1, shadow_from, loads1)
-        return self._take(cmem, cmem.spacing, shadow_from, loads1, ctx.N1, path, ctx.load, hint, shadow=True)
+        return self._take(cmem, cmem.spacing, state.loads, loads1, ctx.N1, ctx.path, ctx.load, shadow=True)
 
     # -- one lattice ----------------------------------------------------------
     def _lattice(self, h: float, n: int) -> ToeplitzLattice:
@@ -1247,20 +1235,10 @@ def _toward(now: GeneralMemory, end, fraction: float):
 
 def _refined(coarse: GeneralMemory):
     """(first, status) of the shadow's pattern ``coarse`` on the fine lattice (half its cell): fine cells 2c
-    and 2c + 1 take coarse cell c's status (the inverse of :func:`_coarsened`); None out of contact."""
+    and 2c + 1 take coarse cell c's status; None out of contact."""
     if coarse.normal is None:
         return None
     return 2 * coarse.first, np.repeat(coarse.status, 2)
-
-
-def _coarsened(fine: GeneralMemory):
-    """(first, status) of ``fine``'s pattern on the lattice of twice its cell (the shadow's): coarse cell c
-    covers fine cells 2c and 2c + 1 and takes the status of the one of them in ``fine``'s range, the
-    second where both are."""
-    first = fine.first // 2
-    count = (fine.first + fine.q.size + 1) // 2 - first
-    idx = np.clip(2 * (first + np.arange(count)) + 1 - fine.first, 0, fine.q.size - 1)
-    return first, fine.status[idx].copy()
 
 
 def _decision_tolerances(qmax, gscale, floor) -> tuple[float, float]:
