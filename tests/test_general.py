@@ -1286,14 +1286,14 @@ def test_the_sub_steps_start_from_the_pattern_moving_to_the_end(monkeypatch):
 
 
 def test_the_fine_takes_start_from_the_shadows_whole_step_pattern(monkeypatch):
-    """The shadow lattice takes each step once, whole (GeneralSolver._rough): that take decides the
-    sub-steps, is the step's shadow, and the fine takes start from its pattern refined (_refined: fine cells
-    2c and 2c + 1 take coarse cell c's status), moved part of the way for a sub-step (_toward). Only the
-    iterations change (each step is strictly convex): on the split-stick punch history (256 nodes) every
-    state and estimate is the same to 1e-12 of its scale with and without the hint, and the hint saves
-    iterations (measured: 465 against 636 on it; on the random histories at 1024 nodes the whole-step
-    trial on the shadow took the CPU time per step down 8-11 % with the states the same to the last bit,
-    and the shadow taken once per step instead of every other sub-step another 14-17 %)."""
+    """The shadow lattice takes each step whole first (GeneralSolver._rough): that take decides the
+    sub-steps, is the shadow of a step of at most SHADOW_EVERY sub-steps, and the fine takes start from its
+    pattern refined (_refined: fine cells 2c and 2c + 1 take coarse cell c's status), moved part of the way
+    for a sub-step (_toward). Only the iterations change (each step is strictly convex): on the split-stick
+    punch history (256 nodes) every state and estimate is the same to 1e-12 of its scale with and without
+    the hint, and the hint saves iterations (measured: 465 against 636 on it; on the random histories at
+    1024 nodes the whole-step trial on the shadow took the CPU time per step down 8-11 % with the states the
+    same to the last bit)."""
     from types import SimpleNamespace
 
     coarse = SimpleNamespace(normal=object(), first=3, status=np.array([1, 0, 0, -1], np.int8))
@@ -1301,20 +1301,8 @@ def test_the_fine_takes_start_from_the_shadows_whole_step_pattern(monkeypatch):
     assert first == 6 and status.tolist() == [1, 1, 0, 0, 0, 0, -1, -1]
     assert general_module._refined(SimpleNamespace(normal=None, first=0, status=np.zeros(0, np.int8))) is None
 
-    shadows = []
-    take = GeneralSolver._take
-
-    def counted(self, *args, shadow=False, **kwargs):
-        shadows.append(shadow)
-        return take(self, *args, shadow=shadow, **kwargs)
-
-    monkeypatch.setattr(GeneralSolver, "_take", counted)
     (hinted, with_hint), (plain, without), width = _split_history_with_and_without(
         monkeypatch, "_refined", lambda memory: None)
-    # one shadow take per step that moved in contact, none in the sub-steps
-    moved = sum(1 for (a, _), (b, _) in zip(with_hint[1:], with_hint) if a.loads != b.loads and a.loads.P > 0)
-    moved += with_hint[0][0].loads.P > 0  # the first step, from rest
-    assert sum(shadows) == 2 * moved  # both runs
     assert hinted.counters["substeps"] > 0
     assert hinted.counters["iterations"] < plain.counters["iterations"]
     for (a, ra), (b, rb) in zip(with_hint, without):
@@ -1327,6 +1315,55 @@ def test_the_fine_takes_start_from_the_shadows_whole_step_pattern(monkeypatch):
             assert np.max(np.abs(ma.q - mb.q)) <= 1e-12 * scale
         assert a.stick_left == pytest.approx(b.stick_left, rel=0, abs=1e-12 * width)
         assert ra.error_estimate == pytest.approx(rb.error_estimate, rel=1e-9, abs=1e-12)
+
+
+def test_the_shadow_takes_every_few_sub_steps_and_does_not_feed_the_fine_lattice(monkeypatch):
+    """The shadow lattice takes a step of at most SHADOW_EVERY sub-steps once, whole (the take that decided
+    them), and a longer one again on every SHADOW_EVERY-th sub-step and the last: on the split-stick punch
+    history (256 nodes) the shadow's takes are counted against the sub-steps, and with SHADOW_EVERY = 1 (a
+    take for every sub-step) and MAX_SUBSTEPS (one per step) the fine lattice's states are the same to the
+    last bit, while the estimates change. (The fine lattice reads the shadow's pattern as a start, and its
+    stick edges for the number of sub-steps; the shadow's own sub-steps change its state a little, which
+    here changes no such decision.)"""
+    counts = []
+    take, single = GeneralSolver._take, GeneralSolver.step
+
+    def counted(self, *args, shadow=False, **kwargs):
+        counts[-1][0] += shadow
+        return take(self, *args, shadow=shadow, **kwargs)
+
+    def step(self, state, t1, loads1):
+        substeps = self.counters["substeps"]
+        counts.append([0, state.loads != loads1 and loads1.P > 0])
+        out = single(self, state, t1, loads1)
+        counts[-1].append(self.counters["substeps"] - substeps)
+        return out
+
+    monkeypatch.setattr(GeneralSolver, "_take", counted)
+    monkeypatch.setattr(GeneralSolver, "step", step)
+    runs, longer = {}, {}
+    default = general_module.SHADOW_EVERY
+    for every in (default, 1, general_module.MAX_SUBSTEPS):
+        monkeypatch.setattr(general_module, "SHADOW_EVERY", every)
+        counts.clear()
+        runs[every] = _split_history_with_and_without(monkeypatch, "SHADOW_EVERY", every)[0][1]
+        mine = counts[:len(counts) // 2]  # the first of the two runs
+        for shadows, moved, pieces in mine:
+            expected = 0 if not moved else 1 if pieces <= every else 1 + sum(
+                1 for k in range(1, pieces + 1) if k % every == 0 or k == pieces)
+            assert shadows == expected
+        longer[every] = sum(1 for _, _, pieces in mine if pieces > every)
+    assert longer[default] > 0  # steps whose shadow took sub-steps
+    base = runs[default]
+    for every in (1, general_module.MAX_SUBSTEPS):
+        differ = 0
+        for (a, ra), (b, rb) in zip(base, runs[every]):
+            if a.memory.normal is None:
+                continue
+            assert np.array_equal(a.memory.q, b.memory.q) and a.stick_left == b.stick_left
+            assert a.dissipation == b.dissipation
+            differ += ra.error_estimate != rb.error_estimate
+        assert differ > 0
 
 
 #: A receding contact under slip against the exact method, at 256 nodes and the default sub-steps:
