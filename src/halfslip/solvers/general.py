@@ -572,21 +572,20 @@ class GeneralSolver(TangentialSolver):
 
     def _finish(self, state: ContactState, t1: float, loads1: Loads, ctx: "_Context", fine: "_Outcome",
                 rough: "_Outcome | None") -> tuple[ContactState, StepReport, float]:
-        """The error estimate against the shadow lattice's take ``rough`` of the step (None: no estimate, the
-        shadow memory stays), the new state and report, and the distance of the two lattices' widest stick
+        """The error estimate against the shadow lattice's take ``rough`` to the same end (None: no estimate,
+        the shadow memory stays), the new state and report, and the distance of the two lattices' widest stick
         intervals (/ W; 0 without the shadow).
 
         The estimate of the state is the distance of the two lattices' outermost
         stick points. A sub-stepped step reports the larger of it and the
-        distance of the widest intervals: the widest intervals, not only the
+        largest distance of the widest intervals over the sub-steps the shadow
+        took (:meth:`step`): the edges sweep through their cells, and where
+        they fall in a cell sets their error (0.1-0.25 of a cell), so the two
+        lattices can agree by chance at the end (J1 at 256 nodes: error
+        3.9e-4 of W, end estimate 5.7e-5); the widest intervals, not the
         outermost points, because stick islands of a cell or two at an
-        advancing edge come and go between sub-steps. Until 0.4.1 the shadow
-        took every other sub-step and the largest distance of the widest
-        intervals over them counted (the edges sweep through their cells, and
-        the lattices can agree by chance at the end: J1 at 256 nodes, error
-        3.9e-4 of W, end distance 5.7e-5; the floor EDGE_PLACEMENT stands for
-        that since 0.3.2); since 0.4.2 the shadow takes the whole step in one,
-        the take that decides the sub-steps (:meth:`step`).
+        advancing edge come and go between sub-steps (the outermost distance
+        reached 0.24 of W in sub-steps whose end states agree to 1e-4).
         """
         mem = state.memory
         N1, h = ctx.N1, ctx.h
