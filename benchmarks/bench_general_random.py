@@ -218,7 +218,7 @@ def machine():
 
 
 #: The untimed run that loads the compiled functions before the timed ones (measured: without it, the first
-#: row, 512 nodes on Hertz, took 14.4 ms per step in one run and 8.8 ms in another, against 8-9 ms after).
+#: row, 512 nodes on Hertz, took 14.4 ms per step in one run and 8.8 ms in another; 9.7 ms with it).
 WARM_UP_NODES = 64
 
 
