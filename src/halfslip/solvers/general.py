@@ -1205,8 +1205,8 @@ def _integrate(path: EdgePath, xs: np.ndarray, edge: float, side: int, A: float,
     d(Delta-eps)/dlam: adding A sigma(lam_x) / 4 counted it twice).
 
     The integrals per unit Q' and sigma' (linear in the two) are kept on ``path``: M1's increments and the
-    arrivals' shape (a unit shear force) at the same points come from one quadrature, and the trial take,
-    the sub-step that ends where it does and the shadow's take of one sub-step ask for the same points again.
+    arrivals' shape (a unit shear force) at the same points come from one quadrature (GeneralSolver._arrivals
+    and _arrival_fit ask for the same points).
     """
     key = (xs.tobytes(), edge, side, A)
     parts = path.integrals.get(key)
