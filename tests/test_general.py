@@ -1243,22 +1243,24 @@ def test_bracketed_edges_on_the_dovetail():
     assert error[steps].max() < 0.5, error[steps].max()
 
 
-def _split_history_with_and_without(monkeypatch, name, replacement):
-    """The split-stick punch history (256 nodes) marched as it is and with general.<name> replaced by
-    ``replacement``: ((solver, [(state, report)]) for each, the reference width)."""
+def _split_history():
+    """The split-stick punch history (256 nodes) marched once: (solver, [(state, report)]), the reference
+    width."""
     from halfslip.geometry import RoundedPunch
 
     data = np.loadtxt(SPLIT_HISTORY, delimiter=",")
     problem = NormalProblem(RoundedPunch(flat_half_width=2e-3, radius=10e-3), 4 * (1 - 0.3**2) / 115e9)
     width = max(problem.solve(P, M).right - problem.solve(P, M).left for P, M in data[1:, [1, 3]])
+    solver = GeneralSolver(problem, 0.6, 256, width=width)
+    return (solver, helpers.march(solver, data[1:, 1:])), width
 
-    def run():
-        solver = GeneralSolver(problem, 0.6, 256, width=width)
-        return solver, helpers.march(solver, data[1:, 1:])
 
-    kept = run()
+def _split_history_with_and_without(monkeypatch, name, replacement):
+    """:func:`_split_history` as it is and with general.<name> replaced by ``replacement``: ((solver,
+    [(state, report)]) for each, the reference width)."""
+    kept, width = _split_history()
     monkeypatch.setattr(general_module, name, replacement)
-    return kept, run(), width
+    return kept, _split_history()[0], width
 
 
 def test_the_sub_steps_start_from_the_pattern_moving_to_the_end(monkeypatch):
@@ -1325,8 +1327,8 @@ def test_the_shadow_takes_every_few_sub_steps_and_does_not_feed_the_fine_lattice
     last bit, while the estimates change. (The fine lattice reads the shadow's pattern as a start, and its
     stick edges for the number of sub-steps; the shadow's own sub-steps change its state a little, which
     here changes no such decision.)"""
-    counts = []
-    take, single = GeneralSolver._take, GeneralSolver.step
+    counts = []  # per step: the shadow's takes, whether it moved in contact, its sub-steps
+    take, step0 = GeneralSolver._take, GeneralSolver.step
 
     def counted(self, *args, shadow=False, **kwargs):
         counts[-1][0] += shadow
@@ -1335,7 +1337,7 @@ def test_the_shadow_takes_every_few_sub_steps_and_does_not_feed_the_fine_lattice
     def step(self, state, t1, loads1):
         substeps = self.counters["substeps"]
         counts.append([0, state.loads != loads1 and loads1.P > 0])
-        out = single(self, state, t1, loads1)
+        out = step0(self, state, t1, loads1)
         counts[-1].append(self.counters["substeps"] - substeps)
         return out
 
@@ -1346,13 +1348,12 @@ def test_the_shadow_takes_every_few_sub_steps_and_does_not_feed_the_fine_lattice
     for every in (default, 1, general_module.MAX_SUBSTEPS):
         monkeypatch.setattr(general_module, "SHADOW_EVERY", every)
         counts.clear()
-        runs[every] = _split_history_with_and_without(monkeypatch, "SHADOW_EVERY", every)[0][1]
-        mine = counts[:len(counts) // 2]  # the first of the two runs
-        for shadows, moved, pieces in mine:
+        runs[every] = _split_history()[0][1]
+        for shadows, moved, pieces in counts:
             expected = 0 if not moved else 1 if pieces <= every else 1 + sum(
                 1 for k in range(1, pieces + 1) if k % every == 0 or k == pieces)
             assert shadows == expected
-        longer[every] = sum(1 for _, _, pieces in mine if pieces > every)
+        longer[every] = sum(1 for _, _, pieces in counts if pieces > every)
     assert longer[default] > 0  # steps whose shadow took sub-steps
     base = runs[default]
     for every in (1, general_module.MAX_SUBSTEPS):

@@ -331,7 +331,9 @@ class GeneralSolver(TangentialSolver):
     width : float, optional
         Reference contact width [m]; by default the width of the first contact.
     estimate : bool
-        Carry the half-resolution shadow for the per-step error estimate.
+        Carry the half-resolution shadow for the per-step error estimate. Its take
+        of the whole step also decides the sub-steps (:meth:`_pieces`); without it
+        the fine lattice takes that trial.
     travel : float, optional
         Largest travel of a contact edge, as a fraction of the contact width,
         over a slipping (sub-)step (0: never subdivide). Default DEFAULT_TRAVEL.
