@@ -728,16 +728,16 @@ class GeneralSolver(TangentialSolver):
                     glock += size * shape[j] - now[j]
         self.counters["iterations"] += iterations
         self.counters["restarts"] += restarts
-        g = delta_int - Tq + sigma_term
-        s = g - glock
-        stick = status == 0
-        slip = ~stick
-        residual = 0.0 if gross else _check(q, qmax, s, status, h * float(np.sum(q)), loads1.Q, f * loads1.P,
-                                            f * float(cap.max()), A * f * float(cap.max()) * h,
-                                            ROUNDING * float(np.max(np.abs(glock))))
-        g = np.where(stick, glock, g)
-        s = np.where(stick, 0.0, s)
-        dissipation = float(np.sum(f * 0.5 * (cap0 + cap)[slip] * np.abs(s[slip]))) * h
+        g, s, parts, coulomb, direction, stuck, locked = _settled(delta_int, Tq, sigma_term, glock, status, q, qmax,
+                                                                  cap0, cap, f)
+        slipped = parts.size  # the slipping cells
+        if gross:
+            residual = 0.0
+        else:
+            cap_max = float(cap.max())
+            residual = _verdict(coulomb, direction, stuck, h * float(np.sum(q)), loads1.Q, f * loads1.P, f * cap_max,
+                                A * f * cap_max * h, ROUNDING * locked)
+        dissipation = float(np.sum(parts)) * h
         shift = self._shift(delta_int, q, h, lat)
         if old and not shadow:
             # cells that leave the contact during the step while slipping dissipate until they leave
@@ -749,7 +749,7 @@ class GeneralSolver(TangentialSolver):
         slipping = _slipping_edges(drives, loads0, loads1, f) if drives is not None else (False, False)
         drives = tuple((u / f, v) for u, v in drives) if any(slipping) else None
         placement = 0.0
-        if not np.any(slip):
+        if slipped == 0:
             regime, edges = Regime.STICK, (N1.left, N1.right)
             if any(slipping):
                 # (S1): an edge slips, over less than its end cell (which sticks)
@@ -758,11 +758,11 @@ class GeneralSolver(TangentialSolver):
                 if edges != (N1.left, N1.right):
                     regime = Regime.PARTIAL_SLIP
             widest = edges
-        elif np.all(slip):
+        elif slipped == n:
             regime, edges = Regime.GROSS_SLIDING, (math.nan, math.nan)
             widest = edges
         else:
-            runs = _runs(stick)
+            runs = _runs(status == 0)
             regime = Regime.PARTIAL_SLIP
             *edges, placement = _run_edges(x, q, qmax, status, N1, h, runs[0][0], runs[-1][1] - 1, slipping,
                                           drives)
@@ -777,7 +777,7 @@ class GeneralSolver(TangentialSolver):
             else:  # the estimate covers the widest interval too (its spread over sub-steps, _finish)
                 *widest, inner = _run_edges(x, q, qmax, status, N1, h, a, b - 1, slipping, drives)
                 widest, placement = tuple(widest), max(placement, inner)
-        return _Outcome(memory, shift, dissipation, edges, widest, regime, bool(np.any(slip)), iterations, residual,
+        return _Outcome(memory, shift, dissipation, edges, widest, regime, slipped > 0, iterations, residual,
                         message, slipping, placement)
 
     def _active_set(self, lat: "_EndCellLattice", n: int, r: np.ndarray, qmax: np.ndarray, total: float,
@@ -1184,15 +1184,30 @@ class _Load:
     def capacity(self, first: int, n: int, spacing: float) -> np.ndarray:
         """(1/spacing) int p over each of the n cells from ``first``, the end cells extended to the edges
         (normalised so that spacing sum = P: the quadrature's own ~1e-10 would show in gross sliding)."""
-        m = round(spacing / self.h)
-        k = (first + 1 + np.arange(n - 1)) * m  # inner cell boundaries in units of h
-        idx = np.clip(k - self.k0 + 1, 0, self.inner + 1)
-        cum = np.concatenate(([0.0], self.cum[idx], [self.cum[-1]]))
-        cap = np.diff(cum) / spacing
+        cap = _cell_loads(self.cum, self.k0, self.inner, first, n, round(spacing / self.h), spacing)
         total = float(np.sum(cap)) * spacing
         if total > 0.0:
             cap *= self.N.P / total
         return cap
+
+
+@numba.njit(cache=True)
+def _cell_loads(cum, k0, inner, first, n, m, spacing):  # pragma: no cover - compiled
+    """_Load.capacity before its normalisation: (1/spacing) int p over each of the n cells from ``first`` (cells of
+    m table cells), from the table's cumulative loads ``cum`` (at the contact's left edge, its ``inner`` lattice
+    points from k0 and its right edge); the end cells reach to the edges."""
+    cap = np.empty(n)
+    last = cum.size - 1
+    lo = 0.0
+    for j in range(n):
+        if j < n - 1:
+            i = (first + 1 + j) * m - k0 + 1  # the cell's right boundary among the table's points
+            hi = cum[min(max(i, 0), inner + 1)]
+        else:
+            hi = cum[last]
+        cap[j] = (hi - lo) / spacing
+        lo = hi
+    return cap
 
 
 def _integrate(path: EdgePath, xs: np.ndarray, edge: float, side: int, A: float, formation,
@@ -1336,17 +1351,45 @@ def _project(v: np.ndarray, qmax: np.ndarray, total: float) -> np.ndarray:
     return np.clip(v - 0.5 * (lo + hi), -qmax, qmax)
 
 
-def _check(q, qmax, s, status, force, Q, fP, qscale, gscale, floor=0.0) -> float:
-    """The step's own verification, relative to CHECK_TOL: Coulomb (relative to f max p), slip direction
-    and stick (relative to A f max p h, the displacement a cell's bound shear makes, but never below
-    ``floor``, the rounding of the stored displacements), equilibrium (f P)."""
-    stick = status == 0
+def _verdict(coulomb, direction, stuck, force, Q, fP, qscale, gscale, floor=0.0) -> float:
+    """The step's own verification, relative to CHECK_TOL, from the largest Coulomb excess, slip against
+    the shear and slip of a stuck cell (:func:`_settled`): Coulomb relative to f max p, slip direction
+    and stick relative to A f max p h, the displacement a cell's bound shear makes, but never below
+    ``floor``, the rounding of the stored displacements; equilibrium relative to f P."""
     scale_s = max(gscale, floor / CHECK_TOL)
-    coulomb = float(np.max(np.abs(q) - qmax, initial=0.0)) / qscale
-    direction = float(np.max(-(status * s)[~stick], initial=0.0)) / scale_s
-    stuck = float(np.max(np.abs(s[stick]), initial=0.0)) / scale_s
     equilibrium = abs(force - Q) / fP
-    return max(coulomb, direction, stuck, equilibrium) / CHECK_TOL
+    return max(coulomb / qscale, direction / scale_s, stuck / scale_s, equilibrium) / CHECK_TOL
+
+
+@numba.njit(cache=True)
+def _settled(delta, Tq, sigma_term, glock, status, q, qmax, cap0, cap, f):  # pragma: no cover - compiled
+    """A take's end from its active set's answer: g (the locked displacement where a cell sticks, the relative
+    displacement delta - T' q + A sigma x / 4 where it slips), the slip s = g - the lock (0 where stuck), each
+    slipping cell's dissipation f (cap0 + cap) / 2 |s| (in order; the caller sums and scales them), and what
+    :func:`_verdict` checks: the largest Coulomb excess abs(q) - qmax (at least 0), slip against the shear and
+    slip where stuck, and max abs(lock)."""
+    n = q.size
+    g = np.empty(n)
+    s = np.empty(n)
+    parts = np.empty(n)
+    count = 0
+    coulomb = direction = stuck = locked = 0.0
+    for i in range(n):
+        coulomb = max(coulomb, abs(q[i]) - qmax[i])
+        locked = max(locked, abs(glock[i]))
+        gi = delta - Tq[i] + sigma_term[i]
+        si = gi - glock[i]
+        if status[i] == 0:
+            stuck = max(stuck, abs(si))
+            g[i] = glock[i]
+            s[i] = 0.0
+        else:
+            direction = max(direction, -(status[i] * si))
+            g[i] = gi
+            s[i] = si
+            parts[count] = f * 0.5 * (cap0[i] + cap[i]) * abs(si)
+            count += 1
+    return g, s, parts[:count], coulomb, direction, stuck, locked
 
 
 def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
