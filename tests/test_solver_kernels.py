@@ -203,6 +203,37 @@ def test_arrival_strains_is_its_quadrature_rule_to_rounding(short):
                 assert gk == pytest.approx(ref, rel=1e-12, abs=0.0)
 
 
+@pytest.mark.parametrize("kind", ["hertz", "punch"])
+@pytest.mark.parametrize("short", [False, True])
+def test_the_compiled_arrival_integrals_are_the_array_route(kind, short):
+    """GeneralSolver's _integrate on a hermite path (the integrals from an edge out to arriving points, per unit
+    Q' and sigma', and the distance) in one compiled pass (_general_path.hermite_integrals, since 0.4.3) against
+    the array route it replaced (arrival_strain_parts at the Gauss points of each segment, summed outward):
+    the same quadrature in another order of summation, so equal to rounding (1e-13 of the largest integral;
+    measured 0); points inside at the start, on the end edge and beyond the edge's reach included."""
+    from halfslip.solvers import general as gm
+
+    rng = np.random.default_rng(17)
+    for path in _hermite_paths(kind, 4, seed=31 if short else 8, short=short):
+        for side in (-1, 1):
+            i = 0 if side < 0 else 1
+            x = np.sort(_test_points(path, side, rng))[::side]
+            edge = float(path._h0[i])
+            got = gm._integrate(path, x, edge, side, A, None, (1.0, 0.0)), gm._integrate(path, x, edge, side, A,
+                                                                                        None, (0.0, 1.0))
+            order = np.argsort(side * x)
+            ends = np.concatenate(([edge], x[order]))
+            a, b = ends[:-1], ends[1:]
+            pts = a[:, None] + (b - a)[:, None] * gm._GL_T[None, :]
+            inc = gp.arrival_strain_parts(path, pts.ravel(), side, A).reshape(pts.shape + (2,))
+            seg = np.einsum("ijc,j->ic", inc, gm._GL_W) * np.abs(b - a)[:, None]
+            ref = np.empty((x.size, 2))
+            ref[order] = np.cumsum(seg, axis=0)
+            for c in (0, 1):
+                scale = float(np.max(np.abs(ref[:, c])))
+                assert np.max(np.abs(got[c] - ref[:, c])) <= 1e-13 * scale, (kind, short, side, c)
+
+
 # -- the Toeplitz lattice -------------------------------------------------------------------------------
 
 from scipy.linalg import toeplitz  # noqa: E402

@@ -180,11 +180,20 @@ class EdgePath:
         else:
             lo, hi = self._bisect(x, side, np.full(x.shape, self.lam_lo), np.ones(x.shape), BISECTION_STEPS)
             lam = 0.5 * (lo + hi)
+        left, right = self.start()
+        return np.where((x > left) & (x < right), self.lam_lo, lam)
+
+    @property
+    def kind(self) -> str:
+        """"symmetric", "formation" or "hermite": how the edges are represented (the class's notes)."""
+        return self._kind
+
+    def start(self) -> tuple[float, float]:
+        """The edges at lam_lo (points strictly between them are in contact from the start)."""
         if self._start is None:
             left, right = self.edges(np.array(self.lam_lo))
             self._start = float(left), float(right)
-        left, right = self._start
-        return np.where((x > left) & (x < right), self.lam_lo, lam)
+        return self._start
 
     def _bisect(self, x, side, lo, hi, steps):
         """``steps`` bisection steps on "x inside at lam" (the reference algorithm of :meth:`arrival`)."""
@@ -445,3 +454,64 @@ def arrival_strain_parts(path: EdgePath, x: np.ndarray, side: int, compliance: f
         gap = _hermite_gap(x, lam_x, back, side, h0, v0, dh, v1)
         gl, gr = (gap, gr) if side < 0 else (gl, gap)
     return _strain_sum(x, left, right, gl, gr, span, _U, _W, compliance * side)
+
+
+@numba.njit(cache=True)
+def hermite_integrals(xs, edge, side, A, lam_lo, start_left, start_right, h0, v0, h1, v1, side_h0, side_v0,
+                      side_dh, side_v1, ext, margin, steps, newton, gauss_t, gauss_w):  # pragma: no cover - compiled
+    """The arrival integrals of a hermite path from ``edge`` to each of ``xs`` (sorted outward on ``side``), per
+    unit Q' and sigma', and the distance from the edge (columns 0, 1, 2; GeneralSolver's _integrate): on each
+    segment between consecutive points the Gauss-Legendre points ``gauss_t`` (weights ``gauss_w``) of
+    :func:`arrival_strain_parts`' strain, summed outward. One compiled pass of what that function and the
+    caller's segment sums do with arrays."""
+    n, g = xs.size, gauss_t.size
+    pts = np.empty(n * g)
+    widths = np.empty(n)
+    a = edge
+    for i in range(n):
+        b = xs[i]
+        for j in range(g):
+            pts[i * g + j] = a + (b - a) * gauss_t[j]
+        widths[i] = abs(b - a)
+        a = b
+    r = np.empty(pts.size)
+    for k in range(pts.size):
+        r[k] = side * (side_h0 - pts[k])
+    lam_x = _hermite_arrivals(side * side_v0, side * side_dh, side * side_v1, r, lam_lo, ext, margin, steps, newton)
+    for k in range(pts.size):
+        if start_left < pts[k] < start_right:
+            lam_x[k] = lam_lo
+    u = _U
+    span = np.empty(pts.size)
+    back = np.empty((pts.size, u.size))
+    lam = np.empty(pts.size * u.size)
+    for k in range(pts.size):
+        span[k] = lam_x[k] - lam_lo
+        for j in range(u.size):
+            back[k, j] = span[k] * u[j] ** 2
+            lam[k * u.size + j] = lam_x[k] - back[k, j]
+    left, right = _hermite_edges(lam, h0, v0, h1, v1)
+    left = left.reshape((pts.size, u.size))
+    right = right.reshape((pts.size, u.size))
+    gl = np.empty((pts.size, u.size))
+    gr = np.empty((pts.size, u.size))
+    for k in range(pts.size):
+        for j in range(u.size):
+            gl[k, j] = pts[k] - left[k, j]
+            gr[k, j] = pts[k] - right[k, j]
+    gap = _hermite_gap(pts, lam_x, back, side, side_h0, side_v0, side_dh, side_v1)
+    inc = _strain_sum(pts, left, right, gap if side < 0 else gl, gr if side < 0 else gap, span, u, _W, A * side)
+    out = np.empty((n, 3))
+    c0 = c1 = c2 = 0.0
+    for i in range(n):
+        s0 = s1 = 0.0
+        for j in range(g):
+            s0 += inc[i * g + j, 0] * gauss_w[j]
+            s1 += inc[i * g + j, 1] * gauss_w[j]
+        c0 += s0 * widths[i]
+        c1 += s1 * widths[i]
+        c2 += widths[i]
+        out[i, 0] = c0
+        out[i, 1] = c1
+        out[i, 2] = c2
+    return out

@@ -63,7 +63,8 @@ from .. import limits
 from ..geometry import NormalProblem, NormalSolution
 from ..state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime, StepReport
 from ..state import frozen as _frozen
-from ._general_path import EdgePath, arrival_strain_parts
+from ._general_path import (BISECTION_STEPS, EXTREMUM_MARGIN, NEWTON_STEPS, EdgePath, arrival_strain_parts,
+                            hermite_integrals)
 from . import _toeplitz
 from ._toeplitz import ToeplitzLattice, _end_matvec, _G, _run_array, _run_bounds, kernel, stick_solve, table_products
 from .base import BACKWARD_SLIP, FORWARD_SLIP, OUT_OF_CONTACT, STICK, TangentialSolver
@@ -981,13 +982,10 @@ class GeneralSolver(TangentialSolver):
         random history's time at 1024 nodes, 16 % at 4096); elsewhere from :func:`kernel`.
         """
         lat = self._lattices.get(spacing)
-        rows, cols = xs / spacing - 0.5, xc / spacing - 0.5
-        ri, ci = np.rint(rows), np.rint(cols)
-        if lat is None or xs.size == 0 or xc.size == 0 or not (
-                np.all(np.abs(rows - ri) <= LATTICE_POINT) and np.all(np.abs(cols - ci) <= LATTICE_POINT)):
+        span, ri, ci = (0, None, None) if lat is None else _lattice_indices(
+            np.ascontiguousarray(xs, dtype=float), np.ascontiguousarray(xc, dtype=float), spacing, LATTICE_POINT)
+        if span == 0:
             return kernel(xs[:, None] - xc[None, :], spacing, self.datum, self.A) @ q
-        ri, ci = ri.astype(np.int64), ci.astype(np.int64)
-        span = int(max(ri.max(), ci.max()) - min(ri.min(), ci.min())) + 1
         q2 = np.asarray(q, dtype=float)
         q2 = q2[:, None] if q2.ndim == 1 else np.ascontiguousarray(q2)
         out = table_products(lat._kernel_to(span), ri, ci, q2)
@@ -1192,6 +1190,33 @@ class _Load:
 
 
 @numba.njit(cache=True)
+def _lattice_indices(xs, xc, spacing, tol):  # pragma: no cover - compiled
+    """The lattice indices of the points ``xs`` and ``xc`` (centres x = (i + 1/2) spacing, each within ``tol``
+    of a cell of one) and the span of all of them in cells; span 0 where one is not a lattice point or either
+    is empty (GeneralSolver._products then forms its kernel)."""
+    ri = np.empty(xs.size, np.int64)
+    ci = np.empty(xc.size, np.int64)
+    if xs.size == 0 or xc.size == 0:
+        return 0, ri, ci
+    lo = hi = 0
+    for k in range(xs.size + xc.size):
+        v = (xs[k] if k < xs.size else xc[k - xs.size]) / spacing - 0.5
+        r = np.rint(v)
+        if not abs(v - r) <= tol:
+            return 0, ri, ci
+        i = int(r)
+        if k < xs.size:
+            ri[k] = i
+        else:
+            ci[k - xs.size] = i
+        if k == 0 or i < lo:
+            lo = i
+        if k == 0 or i > hi:
+            hi = i
+    return hi - lo + 1, ri, ci
+
+
+@numba.njit(cache=True)
 def _cell_loads(cum, k0, inner, first, n, m, spacing):  # pragma: no cover - compiled
     """_Load.capacity before its normalisation: (1/spacing) int p over each of the n cells from ``first`` (cells of
     m table cells), from the table's cumulative loads ``cum`` (at the contact's left edge, its ``inner`` lattice
@@ -1230,14 +1255,21 @@ def _integrate(path: EdgePath, xs: np.ndarray, edge: float, side: int, A: float,
     if parts is None:
         order = np.argsort(side * xs)
         xsorted = xs[order]
-        ends = np.concatenate(([edge], xsorted))
-        a, b = ends[:-1], ends[1:]
-        pts = a[:, None] + (b - a)[:, None] * _GL_T[None, :]
-        inc = arrival_strain_parts(path, pts.ravel(), side, A)
-        seg = np.einsum("ijc,j->ic", inc.reshape(pts.shape + (2,)), _GL_W) * np.abs(b - a)[:, None]
         parts = np.empty((xs.size, 3))
-        parts[order, :2] = np.cumsum(seg, axis=0)
-        parts[order, 2] = np.cumsum(np.abs(b - a))  # the distance from the edge, for a constant strain
+        if path.kind == "hermite" and xs.size:
+            (v0, dh, v1), h0, ext = path._side(side)
+            left, right = path.start()
+            parts[order] = hermite_integrals(np.ascontiguousarray(xsorted), edge, side, A, path.lam_lo, left, right,
+                                             path._h0, path._v0, path._h1, path._v1, h0, v0, dh, v1, ext,
+                                             EXTREMUM_MARGIN, BISECTION_STEPS, NEWTON_STEPS, _GL_T, _GL_W)
+        else:
+            ends = np.concatenate(([edge], xsorted))
+            a, b = ends[:-1], ends[1:]
+            pts = a[:, None] + (b - a)[:, None] * _GL_T[None, :]
+            inc = arrival_strain_parts(path, pts.ravel(), side, A)
+            seg = np.einsum("ijc,j->ic", inc.reshape(pts.shape + (2,)), _GL_W) * np.abs(b - a)[:, None]
+            parts[order, :2] = np.cumsum(seg, axis=0)
+            parts[order, 2] = np.cumsum(np.abs(b - a))  # the distance from the edge, for a constant strain
         parts.flags.writeable = False
         path.integrals[key] = parts
     l0, l1 = path.loads0, path.loads1
