@@ -98,6 +98,31 @@ def _pressure_terms(x, x0, d, c0, c1, knots, jumps):  # pragma: no cover - compi
     return out
 
 
+@numba.njit(cache=True)
+def _pressure_at(x, x0, d, c0, c1, knots, jumps, piA):  # pragma: no cover - compiled
+    """p at each of ``x`` (flat): :func:`_pressure_terms` / ``piA`` (pi A) strictly inside the contact
+    [x0 - d, x0 + d], 0 elsewhere (``_ContactPressure.__call__`` in one pass)."""
+    left, right = x0 - d, x0 + d
+    count = 0
+    for i in range(x.size):
+        if left < x[i] < right:
+            count += 1
+    inside = np.empty(count)
+    c = 0
+    for i in range(x.size):
+        if left < x[i] < right:
+            inside[c] = x[i]
+            c += 1
+    total = _pressure_terms(inside, x0, d, c0, c1, knots, jumps)
+    out = np.zeros(x.size)
+    c = 0
+    for i in range(x.size):
+        if left < x[i] < right:
+            out[i] = total[c] / piA
+            c += 1
+    return out
+
+
 @numba.njit(cache=True, error_model="numpy")
 def _cos_integrals(left, right, lower, upper):  # pragma: no cover - compiled
     """int cos(m theta) dtheta, m = 0..5, over each piece [lower_j, upper_j] met by each contact

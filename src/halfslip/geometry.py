@@ -563,17 +563,19 @@ class _ContactPressure:
 
     def __call__(self, x: ArrayLike) -> FloatArray:
         x = np.asarray(x, dtype=float)
-        x0, d = self.center, self.half_width
-        left, right = x0 - d, x0 + d
-        out = np.zeros(x.shape)
-        inside = (x > left) & (x < right)
-        from ._geometry_kernels import _pressure_terms
+        from ._geometry_kernels import _pressure_at
 
-        total = _pressure_terms(np.ascontiguousarray(x[inside]), x0, d, self.smooth[0], self.smooth[1],
-                                np.ascontiguousarray(self.knots, dtype=float),
-                                np.ascontiguousarray(self.jumps, dtype=float).reshape(-1, 3))
-        out[inside] = total / (math.pi * self.compliance)
-        return out
+        out = _pressure_at(np.ascontiguousarray(x.reshape(-1)), self.center, self.half_width, self.smooth[0],
+                           self.smooth[1], self._knots, self._jumps, math.pi * self.compliance)
+        return out.reshape(x.shape)
+
+    @cached_property
+    def _knots(self) -> FloatArray:
+        return np.ascontiguousarray(self.knots, dtype=float)
+
+    @cached_property
+    def _jumps(self) -> FloatArray:
+        return np.ascontiguousarray(self.jumps, dtype=float).reshape(-1, 3)
 
 
 # ---------------------------------------------------------------------------
