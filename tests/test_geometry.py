@@ -629,3 +629,30 @@ def test_piece_cos_integrals_match_the_angles():
     tiny = _piece_integrals(pieces, np.array([0.0]), np.array([1e-310])).cos_integrals
     assert np.all(np.isfinite(tiny))
     assert np.allclose(tiny, by_angles(pieces, np.array([0.0]), np.array([1e-310])), rtol=0.0, atol=1e-14)
+
+
+@pytest.mark.parametrize("kind", ["hertz", "punch", "tabulated"])
+def test_one_contacts_solution_in_one_compiled_call_is_the_batched_route(kind):
+    """NormalProblem._solution takes a contact's rotation, pressure coefficients and inner knots from one
+    compiled call (_geometry_kernels._contact_solution, since 0.4.3, the general solver asks at every
+    sub-step) instead of _piece_integrals, _moments_from and _ContactPressure.from_integrals: the same
+    operations, so the same numbers to the last bit (the sums over the pieces stay numpy's), on contacts
+    anywhere across a Hertz pad, a rounded punch and a tabulated profile of 399 samples."""
+    from halfslip import geometry as geo
+
+    x = np.linspace(-5e-3, 5e-3, 399)
+    profile = {"hertz": Hertz(R), "punch": RoundedPunch(W, R),
+               "tabulated": TabulatedProfile(x, x**2 / (2 * R) + 1e-7 * np.sin(3e3 * x) ** 2)}[kind]
+    problem = NormalProblem(profile, A)
+    rng = np.random.default_rng(3)
+    for _ in range(100):
+        d = rng.uniform(1e-6, 2e-3)
+        center = rng.uniform(-1e-3, 1e-3)
+        got = problem._solution(1.0, 0.0, center, d)
+        data = geo._piece_integrals(problem._pieces, np.array([center]), np.array([d]))
+        rotation = -float(geo._moments_from(data, np.array([d])).slope[0, 0]) / math.pi
+        pressure = geo._ContactPressure.from_integrals(problem._pieces, problem.compliance, center, d, data)
+        assert got.rotation == rotation
+        assert got._pressure.smooth == pressure.smooth
+        assert np.array_equal(got._pressure.knots, pressure.knots)
+        assert np.array_equal(got._pressure.jumps, pressure.jumps)

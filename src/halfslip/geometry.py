@@ -1234,19 +1234,26 @@ class NormalProblem:
     def _solution(
         self, P: float, M: float, center: float, half_width: float, iterations: int = 0, residual: float = 0.0
     ) -> NormalSolution:
+        from ._geometry_kernels import _contact_solution
+
         center, half_width = float(center), float(half_width)
-        d = np.array([half_width])
-        data = _piece_integrals(self._pieces, np.array([center]), d)
+        pieces = self._pieces
+        slope, terms0, terms1, klo, khi = _contact_solution(center, half_width, pieces.breaks, pieces.lower,
+                                                            pieces.upper, pieces.coeffs, pieces.origins,
+                                                            _SLOPE_MOMENTS, _CURVATURE_MOMENTS)
+        d = half_width
+        smooth = (d * float(np.sum(terms0)), d * d * float(np.sum(terms1)))
         return NormalSolution(
             P=P,
             M=M,
             left=center - half_width,
             right=center + half_width,
-            rotation=-float(_moments_from(data, d).slope[0, 0]) / math.pi,
+            rotation=-float(slope) / math.pi,
             separated=False,
             iterations=iterations,
             residual=residual,
-            _pressure=_ContactPressure.from_integrals(self._pieces, self.compliance, center, half_width, data),
+            _pressure=_ContactPressure(center, d, self.compliance, pieces.breaks[klo:khi], pieces.jumps[klo:khi],
+                                       smooth),
         )
 
     # -- symmetric profiles, M = 0 ---------------------------------------------
