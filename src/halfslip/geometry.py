@@ -565,9 +565,12 @@ class _ContactPressure:
         x = np.asarray(x, dtype=float)
         from ._geometry_kernels import _pressure_at
 
-        out = _pressure_at(np.ascontiguousarray(x.reshape(-1)), self.center, self.half_width, self.smooth[0],
-                           self.smooth[1], self._knots, self._jumps, math.pi * self.compliance)
-        return out.reshape(x.shape)
+        return _pressure_at(np.ascontiguousarray(x.reshape(-1)), *self.arguments()).reshape(x.shape)
+
+    def arguments(self) -> tuple:
+        """_geometry_kernels._pressure_at's arguments after the points (for compiled callers)."""
+        return (self.center, self.half_width, self.smooth[0], self.smooth[1], self._knots, self._jumps,
+                math.pi * self.compliance)
 
     @cached_property
     def _knots(self) -> FloatArray:
@@ -843,6 +846,11 @@ class NormalSolution:
         if self._pressure is None:
             return np.zeros(np.shape(x))[()]
         return self._pressure(x)[()]
+
+    def pressure_arguments(self) -> tuple:
+        """The arguments after the points of the compiled pressure (_geometry_kernels._pressure_at), for
+        callers that evaluate it in compiled code; in contact only."""
+        return self._pressure.arguments()
 
     def load_to(self, x: ArrayLike, magnitude: bool = False):
         """int p from the left edge to ``x`` [N/m] (0 left of the contact, P right of it), closed form;

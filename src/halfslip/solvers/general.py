@@ -60,6 +60,7 @@ import numba
 import numpy as np
 
 from .. import limits
+from .._geometry_kernels import _pressure_at
 from ..geometry import NormalProblem, NormalSolution
 from ..state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime, StepReport
 from ..state import frozen as _frozen
@@ -1722,12 +1723,12 @@ class _EndCell:
         # the pieces: cut at the kinks and at the cell's centre (inside the support: it is in the contact)
         self.cuts = [a] + [float(k) for k in kinks if a < k < b] + [b]
         own = a < self.x0 < b
-        xi, p, dxi = self._rule(sorted(self.cuts + [self.x0]) if own else self.cuts, self.x0 if own else None)
-        self.xi = xi
-        # the weights of the force h, the moments of the pressure-shaped force less those of the uniform one
-        # (odd ones of the cell vanish), in cells (the k-th moment over h^(k + 1)), and the shaped potential at
-        # the cell's own centre, from the same points (the rule is cut there)
-        self.w, self.scale, self.series, at_own = _end_cell_setup(xi, p, dxi, self.x0, h, a, b, own, END_CELL_TERMS)
+        # the rule's points; the weights of the force h, the moments of the pressure-shaped force less those of
+        # the uniform one (odd ones of the cell vanish), in cells (the k-th moment over h^(k + 1)), and the
+        # shaped potential at the cell's own centre, from the same points (the rule is cut there)
+        self.xi, self.w, self.scale, self.series, at_own = _end_cell_build(
+            np.array(self.cuts), self.x0, own, normal.center, normal.half_width, _EC_S, _EC_DS,
+            normal.pressure_arguments(), h, a, b, END_CELL_TERMS)
         self.own = at_own if own else None
 
     def _rule(self, breaks, at=None):
@@ -1772,6 +1773,38 @@ def _end_cell_rule(breaks, c, d, S, DS):  # pragma: no cover - compiled
             xi[j * g + i] = c - d * math.cos(t)
             dxi[j * g + i] = d * math.sin(t) * ((t1 - t0) * DS[i])
     return xi, dxi
+
+
+@numba.njit(cache=True)
+def _end_cell_build(cuts, x0, own, c, d, S, DS, pressure, h, a, b, terms):  # pragma: no cover - compiled
+    """_EndCell's set-up in one call: its rule over the pieces between ``cuts`` (and x0 where ``own``, the
+    cell's centre inside the support: the rule is cut there too), the pressure at its points (``pressure``:
+    _geometry_kernels._pressure_at's arguments) and :func:`_end_cell_setup`. Returns the points, the weights
+    of the force h, their scale, the multipole coefficients and the shaped potential at x0 (NaN unless
+    ``own``)."""
+    if own:
+        breaks = np.empty(cuts.size + 1)  # x0 among the cuts, after any equal to it (as sorted() puts it)
+        k = 0
+        placed = False
+        for i in range(cuts.size):
+            if not placed and cuts[i] > x0:
+                breaks[k] = x0
+                k += 1
+                placed = True
+            breaks[k] = cuts[i]
+            k += 1
+        if not placed:
+            breaks[k] = x0
+    else:
+        breaks = cuts
+    xi, dxi = _end_cell_rule(breaks, c, d, S, DS)
+    at = np.empty(xi.size + 1 if own else xi.size)
+    at[:xi.size] = xi
+    if own:
+        at[xi.size] = x0
+    p = _pressure_at(at, *pressure)
+    w, scale, series, shaped = _end_cell_setup(xi, p, dxi, x0, h, a, b, own, terms)
+    return xi, w, scale, series, shaped
 
 
 @numba.njit(cache=True)
