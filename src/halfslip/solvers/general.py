@@ -60,7 +60,7 @@ import numba
 import numpy as np
 
 from .. import limits
-from .._geometry_kernels import _pressure_at
+from .._geometry_kernels import _load_to_terms, _pressure_at
 from ..geometry import NormalProblem, NormalSolution
 from ..state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime, StepReport
 from ..state import frozen as _frozen
@@ -1141,16 +1141,15 @@ class _Load:
         self.N, self.h = N, h
         c, d = N.center, N.half_width
         self.k0 = math.ceil(N.left / h)
-        k1 = math.floor(N.right / h)
-        inner = h * np.arange(self.k0, k1 + 1)
-        inner = inner[(inner > N.left) & (inner < N.right)]
+        # the lattice points inside the contact, the closed form there and the size of its terms, which varies
+        # smoothly along the contact: 17 samples find its largest
+        inner, loads, size = _closed_form_loads(np.linspace(N.left, N.right, 17), N.left, N.right, h, self.k0,
+                                                math.floor(N.right / h), *N.pressure_arguments())
         self.k0 = round(inner[0] / h) if inner.size else self.k0
         self.inner = inner.size
-        # the size of the terms varies smoothly along the contact: 17 samples find its largest
-        _, size = N.load_to(np.linspace(N.left, N.right, 17), magnitude=True)
-        self.closed_form = EPS * float(np.max(size)) <= LOAD_ROUNDING * N.P * h / (N.right - N.left)
+        self.closed_form = EPS * size <= LOAD_ROUNDING * N.P * h / (N.right - N.left)
         if self.closed_form:
-            self.cum = np.concatenate(([0.0], N.load_to(inner), [N.P]))
+            self.cum = np.concatenate(([0.0], loads, [N.P]))
             return
         kinks = kinks[(kinks > N.left) & (kinks < N.right)]
         extra = [kinks]
@@ -1215,6 +1214,33 @@ def _lattice_indices(xs, xc, spacing, tol):  # pragma: no cover - compiled
         if k == 0 or i > hi:
             hi = i
     return hi - lo + 1, ri, ci
+
+
+@numba.njit(cache=True)
+def _closed_form_loads(samples, left, right, h, k0, k1, x0, d, c0, c1, knots, jumps, piA):  # pragma: no cover
+    """_Load's closed form in one call: the lattice points k h (k0 <= k <= k1) strictly inside the contact
+    [left, right], int p from its left edge to each (NormalSolution.load_to; ``x0`` .. ``piA`` the compiled
+    pressure's arguments) and the largest size of that sum's terms at ``samples``."""
+    count = 0
+    for k in range(k0, k1 + 1):
+        if left < h * k < right:
+            count += 1
+    inner = np.empty(count)
+    c = 0
+    for k in range(k0, k1 + 1):
+        v = h * k
+        if left < v < right:
+            inner[c] = v
+            c += 1
+    scale = d / piA
+    _, size = _load_to_terms(samples, x0, d, c0, c1, knots, jumps, True)
+    largest = -np.inf
+    for i in range(size.size):
+        largest = max(largest, size[i] * scale)
+    total, _ = _load_to_terms(inner, x0, d, c0, c1, knots, jumps, False)
+    for i in range(total.size):
+        total[i] *= scale
+    return inner, total, largest
 
 
 @numba.njit(cache=True)
