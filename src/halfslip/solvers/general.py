@@ -666,32 +666,13 @@ class GeneralSolver(TangentialSolver):
         # edges (as their loads cap do)
         ends = _end_supports(N1, first, n, h)
         lat = _EndCellLattice(lat, ends, self._take_columns(N1, first, n, h, ends, x), N1)
-        # what each cell carries into the step
+        # what each cell carries into the step, and the pattern the active set starts from
         old = mem.normal is not None
-        status = np.zeros(n, np.int8)
-        glock = np.empty(n)
-        G = np.zeros(n)
-        cap0 = np.zeros(n)
-        known = np.zeros(n, bool)
-        if old:
-            lo = max(first, mem.first)
-            hi = min(first + n, mem.first + mem.q.size)
-            if hi > lo:
-                a, b = lo - first, hi - first
-                c, d = lo - mem.first, hi - mem.first
-                status[a:b] = mem.status[c:d]
-                glock[a:b] = mem.g[c:d]
-                G[a:b] = mem.G[c:d]
-                cap0[a:b] = mem.capacity[c:d]
-                known[a:b] = True
-        start = status.copy()
-        if hint is not None:
-            f0, guess = hint
-            lo, hi = max(first, f0), min(first + n, f0 + guess.size)
-            if hi > lo:
-                start[lo - first:hi - first] = guess[lo - f0:hi - f0]
+        status, glock, G, cap0, known, start, arrived = _carried(
+            first, n, mem.first, *((mem.status, mem.g, mem.G, mem.capacity) if old else _NOTHING_CARRIED),
+            *(hint if hint is not None else (0, _NO_HINT)))
         g0 = before = None
-        if not np.all(known):
+        if arrived:
             glock[~known], g0, before = self._arrivals(mem, loads0, loads1, N1, path, x, known, h)
         sigma_term = 0.25 * A * loads1.sigma * x
         r = glock - sigma_term  # stick: (T q)_i - delta = -r_i
@@ -733,14 +714,15 @@ class GeneralSolver(TangentialSolver):
         g, s, parts, coulomb, direction, stuck, locked = _settled(delta_int, Tq, sigma_term, glock, status, q, qmax,
                                                                   cap0, cap, f)
         slipped = parts.size  # the slipping cells
+        total = float(np.sum(q))
         if gross:
             residual = 0.0
         else:
             cap_max = float(cap.max())
-            residual = _verdict(coulomb, direction, stuck, h * float(np.sum(q)), loads1.Q, f * loads1.P, f * cap_max,
+            residual = _verdict(coulomb, direction, stuck, h * total, loads1.Q, f * loads1.P, f * cap_max,
                                 A * f * cap_max * h, ROUNDING * locked)
         dissipation = float(np.sum(parts)) * h
-        shift = self._shift(delta_int, q, h, lat)
+        shift = self._shift(delta_int, total, h, lat)
         if old and not shadow:
             # cells that leave the contact during the step while slipping dissipate until they leave
             dissipation += self._leaving(mem, N1, first, n, shift, x, q, h, loads1.sigma)
@@ -931,10 +913,10 @@ class GeneralSolver(TangentialSolver):
         slip = np.where(st * slip > 0.0, slip, 0.0)
         return float(np.sum(self.f * LEAVING_PRESSURE * mem.capacity[out] * np.abs(slip))) * mem.spacing
 
-    def _shift(self, delta_int: float, q: np.ndarray, h: float, lat: ToeplitzLattice) -> float:
-        """The rigid shift in the package's datum of the lattice's internal one:
-        delta_l = delta_int + (A/pi) Q ln(l / l_int)."""
-        return delta_int + (self.A / math.pi) * h * float(np.sum(q)) * math.log(self.datum / lat.datum)
+    def _shift(self, delta_int: float, total: float, h: float, lat: ToeplitzLattice) -> float:
+        """The rigid shift in the package's datum of the lattice's internal one, ``total`` the sum of the
+        cells' shear (Q = h total): delta_l = delta_int + (A/pi) Q ln(l / l_int)."""
+        return delta_int + (self.A / math.pi) * h * total * math.log(self.datum / lat.datum)
 
     def _displacement(self, shift, xc, q, spacing, sigma, xs, normal) -> np.ndarray:
         """Relative tangential displacement at ``xs`` of the shear ``q`` on the cells centred at ``xc``
@@ -1241,6 +1223,36 @@ def _closed_form_loads(samples, left, right, h, k0, k1, x0, d, c0, c1, knots, ju
     for i in range(total.size):
         total[i] *= scale
     return inner, total, largest
+
+
+_NOTHING_CARRIED = (np.zeros(0, np.int8), np.zeros(0), np.zeros(0), np.zeros(0))
+_NO_HINT = np.zeros(0, np.int8)
+
+
+@numba.njit(cache=True)
+def _carried(first, n, first0, status0, g0, G0, cap0, hint_first, hint):  # pragma: no cover - compiled
+    """What the n cells from lattice index ``first`` carry into a take from the memory whose cells start at
+    ``first0`` (its status, locked displacements, accumulated slip and capacities; empty: out of contact):
+    status, locks (not set where not carried), slip, capacity at the start, which cells are carried, the
+    start pattern (the status, overwritten by ``hint`` from ``hint_first`` where it has cells) and whether
+    any cell arrives."""
+    status = np.zeros(n, np.int8)
+    glock = np.empty(n)
+    G = np.zeros(n)
+    cap = np.zeros(n)
+    known = np.zeros(n, np.bool_)
+    lo, hi = max(first, first0), min(first + n, first0 + status0.size)
+    for j in range(lo, hi):
+        i, k = j - first, j - first0
+        status[i] = status0[k]
+        glock[i] = g0[k]
+        G[i] = G0[k]
+        cap[i] = cap0[k]
+        known[i] = True
+    start = status.copy()
+    for j in range(max(first, hint_first), min(first + n, hint_first + hint.size)):
+        start[j - first] = hint[j - hint_first]
+    return status, glock, G, cap, known, start, hi - lo < n
 
 
 @numba.njit(cache=True)
@@ -1932,6 +1944,10 @@ class _Kept:
         self._items: dict[tuple, tuple] = {}
 
     def get(self, key, owners: tuple):
+        if len(owners) == 1:  # the common case, without the generators
+            owner = owners[0]
+            got = self._items.get((key, id(owner)))
+            return got[1] if got is not None and got[0][0] is owner else None
         got = self._items.get((key, *map(id, owners)))
         return got[1] if got is not None and all(a is b for a, b in zip(got[0], owners)) else None
 
