@@ -505,7 +505,13 @@ class _ContactPressure:
         return cls.from_integrals(pieces, compliance, center, half_width, data)
 
     def edge_coefficients(self) -> tuple[float, float]:
-        """(k_left, k_right) with p ~ k sqrt(distance to the edge) at each edge.
+        """(k_left, k_right) with p ~ k sqrt(distance to the edge) at each edge (found once per contact: a
+        step's edge path asks at both ends, and the next sub-step's start is this one's end)."""
+        return self._edge_coefficients
+
+    @cached_property
+    def _edge_coefficients(self) -> tuple[float, float]:
+        """:meth:`edge_coefficients`.
 
         At the right edge sqrt(1 - s^2) -> sqrt(2 dist / d) and, for a knot
         inside, L(x, knot) -> sqrt(dist) sqrt(2 (knot - left) / (d (right - knot)))
