@@ -306,8 +306,8 @@ RUNS = {
     "one": [(10, 90)],
     "gaps": [(0, 40), (50, 120), (130, 131), (140, 200)],            # gaps of 28 cells: Schur complement
     "gaps-dense": [(0, 20), (30, 60), (70, 100)],                     # span within DENSE_CELLS: its inverse
-    "gaps-wide": [(0, 30), (100, 229), (260, 290)],                   # gaps of 101, 60 other cells: Schur
-    "gaps-long": [(0, 140), (200, 300)],                              # one gap of 60 between long runs
+    "gaps-wide": [(0, 30), (100, 229), (260, 290)],                   # gaps of 101, 60 other cells: two solves
+    "gaps-long": [(0, 140), (200, 300)],                              # one gap of 60 between long runs: two
     "islands": [(0, 5), (100, 229), (290, 291)],                      # 6 cells beside the longest run: Schur
     "island-gap": [(0, 20), (110, 400)],                              # 20 island cells, 90 gap cells: the gaps'
     "cg": [(0, 30), (200, 229), (400, 430)],                          # gaps of 341 > GAP_CELLS: CG, runs dense
@@ -327,6 +327,24 @@ def test_the_inverse_columns_are_the_dense_inverse(lattice):
     # a span within DENSE_CELLS: from the dense inverse
     got = tz._inverse_columns(lattice.tables, 100, np.array([10, 60]), np.array([5, 1]))
     assert _rel(got, np.linalg.inv(_dense(lattice, 100))[:, np.r_[10:15, 60]]) <= 1e-11
+
+
+def test_the_gap_block_is_the_dense_inverse_there(lattice):
+    """T_m^-1 on the gap cells only (rows and columns, from each gap's first column and the generators:
+    _toeplitz._gap_block, the gaps' route from GAP_TWO_SOLVES gap cells on) against the dense inverse, for
+    gaps deep inside a span beyond DENSE_CELLS and a gap near its start (the recursion's rows reach row 0,
+    where B(0, j) = x_j); the same numbers as the columns over the whole span (_inverse_columns) there."""
+    m = 500
+    starts, lengths = np.array([10, 150, 300]), np.array([60, 1, 120])
+    gaps = np.concatenate([np.arange(a, a + n) for a, n in zip(starts, lengths)])
+    first = np.linalg.inv(_dense(lattice, m))[:, starts]
+    x, u = tz._xu(lattice.tables[1], lattice.tables[2], m)
+    got = tz._gap_block(x, u, np.ascontiguousarray(first), starts, lengths)
+    assert _rel(got, np.linalg.inv(_dense(lattice, m))[np.ix_(gaps, gaps)]) <= 1e-11
+    columns = tz._inverse_columns(lattice.tables, m, starts, lengths)
+    exact = tz._gap_block(x, u, np.ascontiguousarray(columns[:, np.r_[0, 60, 61]]), starts, lengths)
+    assert np.array_equal(exact, columns[gaps])
+    assert tz.GAP_TWO_SOLVES <= 60 + 31  # RUNS["gaps-wide"] takes it, RUNS["gaps"] (28 gap cells) does not
 
 
 @pytest.mark.parametrize("case", sorted(RUNS))

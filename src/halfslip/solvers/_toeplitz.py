@@ -135,6 +135,16 @@ ISLAND_COST = 5
 #: 240 19.8; 48 (CG from there, before 0.3.5) 23.3.
 GAP_CELLS = 160
 
+#: The gaps' complement from this many gap cells on takes the span inverse's columns on the gap rows only
+#: (:func:`_gap_block`, O(gap cells^2)) and corrects the span's solution by a second solve, T^-1 (E_Z s), instead
+#: of forming the columns over the whole span (O(span) each) and their product with s (0.4.3). Measured with
+#: a column of ones and two right-hand sides beside runs of 200 / 440 / 800 cells (one process, best of 40):
+#: the same cost at 48 gap cells, 0.76-0.82x at 64, 0.65-0.78x at 93, 0.5-0.67x at 160; 1.5-1.9x slower at 5.
+#: (With it the islands' and the gaps' complements cost the same at about 5 gap cells per island cell beside
+#: a run of 200 cells and about 8 beside 800, benchmarks/bench_solve_routes.py; ISLAND_COST was left at 5:
+#: islands are 4 % of the random histories' takes with several runs and more.)
+GAP_TWO_SOLVES = 48
+
 
 class ToeplitzLattice:
     """T of a uniform lattice of ``size`` cells: products, and solves on contiguous runs.
@@ -488,9 +498,53 @@ def _inverse_columns(tab, m, starts, lengths):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
+def _gap_block(x, u, F, starts, lengths):  # pragma: no cover - compiled
+    """T_m^-1 on the gap cells, rows and columns (the gaps starts[b] .. starts[b] + lengths[b] - 1 of the span),
+    from each gap's first column F[:, b] and the generators x, u of T_m^-1: the Gohberg-Semencul recursion
+    B(i, j) = B(i - 1, j - 1) + (x_i x_j - u_i u_j) / x_0 (B(0, j) = x_j) along the diagonals, on the rows it
+    needs only, O(gap cells^2); the same numbers as :func:`_next_columns` there."""
+    ng = 0
+    for g in range(lengths.size):
+        ng += lengths[g]
+    out = np.empty((ng, ng))
+    x0 = x[0]
+    cb = 0
+    for b in range(starts.size):
+        sb, Lb = starts[b], lengths[b]
+        ra = 0
+        for a in range(starts.size):
+            sa, La = starts[a], lengths[a]
+            # column r of gap b is needed from row sa - (Lb - 1 - r): each column is the last moved down a row
+            lo = max(0, sa - (Lb - 1))
+            hi = sa + La
+            col = np.empty(hi - lo)
+            for i in range(lo, hi):
+                col[i - lo] = F[i, b]
+            for i in range(sa, hi):
+                out[ra + i - sa, cb] = col[i - lo]
+            for r in range(1, Lb):
+                j = sb + r
+                lo_r = max(0, sa - (Lb - 1 - r))
+                new = np.empty(hi - lo_r)
+                for i in range(lo_r, hi):
+                    if i == 0:
+                        new[0] = x[j]
+                    else:
+                        new[i - lo_r] = col[i - 1 - lo] + (x[i] * x[j] - u[i] * u[j]) / x0
+                col, lo = new, lo_r
+                for i in range(sa, hi):
+                    out[ra + i - sa, cb + r] = col[i - lo]
+            ra += La
+        cb += Lb
+    return out
+
+
+@numba.njit(cache=True)
 def _gap_solve(tab, runs, W):  # pragma: no cover - compiled
     """T_SS^-1 [1, W] by the Schur complement of the gaps in the spanning run (ToeplitzLattice._gap_solve):
-    T_SS^-1 b = (T^-1 b~ - X C^-1 (T^-1 b~)_Z)_S, X = T^-1 E_Z, C = X_Z."""
+    T_SS^-1 b = (T^-1 b~ - X C^-1 (T^-1 b~)_Z)_S, X = T^-1 E_Z, C = X_Z. From GAP_TWO_SOLVES gap cells on,
+    C by :func:`_gap_block` and X C^-1 (...) as T^-1 (E_Z C^-1 (...)), a second solve; below, X's columns
+    over the span (:func:`_inverse_columns`) and their product."""
     a, b = runs[0, 0], runs[-1, 1]
     m = b - a
     nr = runs.shape[0]
@@ -507,10 +561,37 @@ def _gap_solve(tab, runs, W):  # pragma: no cover - compiled
         for j in range(lengths[i]):
             gaps[c] = starts[i] + j
             c += 1
-    X = _inverse_columns(tab, m, starts, lengths)
     k = W.shape[1]
-    wide = np.zeros((m, k))
     cells = _stick_cells(runs)
+    if ng >= GAP_TWO_SOLVES and m > DENSE_CELLS:
+        # one solve of [1_S, W] on the span (zero on the gaps) and of each gap's first unit column
+        wide = np.zeros((m, k + 1 + starts.size))
+        for i in range(cells.size):
+            wide[cells[i] - a, 0] = 1.0
+            for j in range(k):
+                wide[cells[i] - a, 1 + j] = W[i, j]
+        for g in range(starts.size):
+            wide[starts[g], k + 1 + g] = 1.0
+        sol = gs_solve(tab, m, wide)
+        x, u = _xu(tab[1], tab[2], m)
+        XZ = _gap_block(x, u, sol[:, k + 1:], starts, lengths)
+        YZ = np.empty((ng, k + 1))
+        for i in range(ng):
+            for j in range(k + 1):
+                YZ[i, j] = sol[gaps[i], j]
+        sz = _spd_solve(XZ, YZ)
+        V = np.zeros((m, k + 1))
+        for i in range(ng):
+            for j in range(k + 1):
+                V[gaps[i], j] = sz[i, j]
+        corr = gs_solve(tab, m, V)
+        out = np.empty((cells.size, k + 1))
+        for i in range(cells.size):
+            for j in range(k + 1):
+                out[i, j] = sol[cells[i] - a, j] - corr[cells[i] - a, j]
+        return out
+    X = _inverse_columns(tab, m, starts, lengths)
+    wide = np.zeros((m, k))
     for i in range(cells.size):
         for j in range(k):
             wide[cells[i] - a, j] = W[i, j]
