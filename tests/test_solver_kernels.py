@@ -420,6 +420,39 @@ def test_displacements_from_the_kernel_table_are_the_kernel_products():
             assert _rel(solver._products(xs, xc, h, q[:, 0]), ref[:, 0]) <= 1e-12
 
 
+@pytest.mark.parametrize("kind", ["hertz", "punch"])
+def test_a_states_displacement_in_one_compiled_pass_is_the_general_path(kind):
+    """GeneralSolver._displacement of a state's shear at lattice points (the arrived and leaving cells and the
+    match points beside its contact), in one compiled pass since 0.4.3 (_displaced: the kernel table's
+    products, the datum, the bulk term and the end cells' corrections), against the general path it keeps
+    for other points (_products, _end_columns and their product): equal to rounding (1e-13 of the largest
+    displacement; measured 0); a point off the lattice (inside an end cell's support) takes the
+    general path."""
+    from halfslip.solvers import general as gm
+
+    from helpers import make
+
+    problem, solver = make(kind, "general", nodes=256)
+    N = problem.solve(P0, 0.05 * P0 * float(problem.half_width(P0)))
+    h = 2.2 * N.half_width / 256
+    solver._lattice(h, 300)
+    first, n = gm._cells(N.left, N.right, h)
+    xc = (first + 0.5 + np.arange(n)) * h
+    q = np.random.default_rng(3).standard_normal(n) * 1e6
+    xs = (first + 0.5 + np.array([-9, -3, -1, 0, 5, n - 1, n, n + 2, n + 11])) * h
+
+    def general_path(xs):
+        ends = gm._end_supports(N, first, n, h)
+        out = 1e-7 - solver._products(xs, xc, h, q) + 0.25 * solver.A * 3e7 * xs
+        return out - solver._end_columns(N, first, h, ends, xs) @ q[[k for k, _, _ in ends]]
+
+    got = solver._displacement(1e-7, xc, q, h, 3e7, xs, N)
+    ref = general_path(xs)
+    assert _rel(got, ref) <= 1e-13
+    inside = np.array([0.5 * (N.left + xc[0])])  # inside the first end cell's support, not its centre
+    assert _rel(solver._displacement(1e-7, xc, q, h, 3e7, inside, N), general_path(inside)) <= 1e-13
+
+
 # the reference's adaptive quadrature meets rounding at 1e-13 on the 1e-12 P0 punch (its pressure is a small
 # difference of large terms) and says so: the test's tolerance there is 1e5 above that
 @pytest.mark.filterwarnings("ignore::scipy.integrate.IntegrationWarning")

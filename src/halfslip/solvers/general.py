@@ -923,6 +923,23 @@ class GeneralSolver(TangentialSolver):
         (package datum, ``shift`` the rigid shift) under the bulk tension ``sigma``: T1. ``normal`` is the
         contact of the state whose cells ``xc`` are (all of them): its end cells carry their shear like
         the pressure over their supports (:func:`_end_supports`). ``q`` of shape (n,) or (n, k)."""
+        lat = self._lattices.get(spacing)
+        if np.ndim(q) == 1 and lat is not None and normal is not None and xc.size:
+            # the usual case (the cells of a state, points on its lattice) in one compiled pass
+            xs = np.ascontiguousarray(xs, dtype=float)
+            span, ri, ci = _lattice_indices(xs, np.ascontiguousarray(xc, dtype=float), spacing, LATTICE_POINT)
+            if span:
+                first = int(round(xc[0] / spacing - 0.5))
+                cells = [(k, self._end_cell(normal, first, k, a, b, spacing))
+                         for k, a, b in _end_supports(normal, first, xc.size, spacing)]
+                datum = (self.A / math.pi) * spacing * math.log(self.datum / lat.datum) * float(np.sum(q))
+                one, two = cells[0][1], cells[-1][1]
+                out, done = _displaced(shift, lat._kernel_to(span), ri, ci, np.ascontiguousarray(q, dtype=float),
+                                       datum, 0.25 * self.A * sigma, xs, -(self.A / math.pi),
+                                       np.array([k for k, _ in cells], np.int64), one.kernel_arguments(),
+                                       two.kernel_arguments(), END_CELL_NEAR, LATTICE_POINT)
+                if done:
+                    return out
         bulk = 0.25 * self.A * sigma * xs
         out = shift - self._products(xs, xc, spacing, q) + (bulk[:, None] if np.ndim(q) == 2 else bulk)
         if normal is not None and xc.size:
@@ -932,6 +949,14 @@ class GeneralSolver(TangentialSolver):
             out = out - C @ q[[k for k, _, _ in ends]]
         return out
 
+    def _end_cell(self, normal, first: int, k: int, a: float, b: float, h: float) -> "_EndCell":
+        """The end cell k (of a state whose cells start at lattice index ``first``) with support [a, b], kept."""
+        cell = self._end_cells.get((a, b, first + k, h), (normal,))
+        if cell is None:
+            cell = self._end_cells.put((a, b, first + k, h), (normal,),
+                                       _EndCell(normal, a, b, (first + k) * h, h, self._kinks))
+        return cell
+
     def _end_columns(self, normal, first, h, ends, xs) -> np.ndarray:
         """(T' - T) at the points ``xs`` for the end cells ``ends`` [(k, a, b)] of a state whose cells start
         at lattice index ``first``: minus the displacement of a unit shear (force h) spread like the
@@ -939,11 +964,7 @@ class GeneralSolver(TangentialSolver):
         kept for the recent states). Shape (xs.size, len(ends)); the datum cancels."""
         out = np.empty((xs.size, len(ends)))
         for c, (k, a, b) in enumerate(ends):
-            cell = self._end_cells.get((a, b, first + k, h), (normal,))
-            if cell is None:
-                cell = self._end_cells.put((a, b, first + k, h), (normal,),
-                                           _EndCell(normal, a, b, (first + k) * h, h, self._kinks))
-            out[:, c] = -(self.A / math.pi) * cell.potential(xs)
+            out[:, c] = -(self.A / math.pi) * self._end_cell(normal, first, k, a, b, h).potential(xs)
         return out
 
     def _take_columns(self, normal, first, n, h, ends, x) -> np.ndarray:
@@ -1776,6 +1797,11 @@ class _EndCell:
                                  _EC_S, _EC_DS)
         return xi, self.normal.pressure(xi if at is None else np.append(xi, at)), dxi
 
+    def kernel_arguments(self) -> tuple:
+        """:func:`_end_cell_kernel`'s arguments after the points and before ``near`` and ``tol``."""
+        return (self.x0, self.h, self.lo, self.a, self.b, self.series, self.xi, self.w,
+                math.nan if self.own is None else self.own)
+
     def potential(self, xs: np.ndarray) -> np.ndarray:
         """The difference of the two log potentials at ``xs``."""
         xs = np.ascontiguousarray(xs, dtype=float)
@@ -1794,6 +1820,31 @@ class _EndCell:
             xj, pj, dj = self._rule(sorted(self.cuts + [x]), x)
             part[i] = _shaped_at(x, xj, pj, dj, self.scale, self.a, self.b)
         return part - (_G(xn - self.lo) - _G(xn - self.lo - self.h))
+
+
+@numba.njit(cache=True)
+def _displaced(shift, t, ri, ci, q, datum, bulk, xs, scale, ends, one, two, near, tol):  # pragma: no cover
+    """GeneralSolver._displacement in one pass for a state's shear ``q`` on its cells ``ci`` at the lattice
+    points ``ri`` (``t`` the kernel's table, ``datum`` its datum's term, ``bulk`` A sigma / 4): shift - T q +
+    bulk x, less the end cells' corrections, ``scale`` = -A/pi times each end cell's potential (``one`` and
+    ``two``: :meth:`_EndCell.kernel_arguments` of the cells ``ends``, one of them for a contact of one cell)
+    times its shear; False where a point lies inside an end cell's support (the caller's general path)."""
+    n = xs.size
+    out = table_products(t, ri, ci, q.reshape((q.size, 1)))[:, 0]
+    for i in range(n):
+        out[i] = (shift - (out[i] + datum)) + bulk * xs[i]
+    corr = np.zeros(n)  # the end cells' columns times their shear, summed over the cells
+    for c in range(ends.size):
+        x0, h, lo, a, b, series, xi, w, own = one if c == 0 else two
+        pot, rest = _end_cell_kernel(xs, x0, h, lo, a, b, series, xi, w, near, own, tol)
+        if rest.size:
+            return out, False
+        qc = q[ends[c]]
+        for i in range(n):
+            corr[i] += (scale * pot[i]) * qc
+    for i in range(n):
+        out[i] -= corr[i]
+    return out, True
 
 
 @numba.njit(cache=True)
