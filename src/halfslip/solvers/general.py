@@ -922,7 +922,9 @@ class GeneralSolver(TangentialSolver):
         """Relative tangential displacement at ``xs`` of the shear ``q`` on the cells centred at ``xc``
         (package datum, ``shift`` the rigid shift) under the bulk tension ``sigma``: T1. ``normal`` is the
         contact of the state whose cells ``xc`` are (all of them): its end cells carry their shear like
-        the pressure over their supports (:func:`_end_supports`). ``q`` of shape (n,) or (n, k)."""
+        the pressure over their supports (:func:`_end_supports`). ``q`` of shape (n,) or (n, k). At points of
+        the state's lattice (every use in a step: arrived, leaving and match points) one compiled pass,
+        :func:`_displaced`; elsewhere the kernel's products and the end cells' columns."""
         lat = self._lattices.get(spacing)
         if np.ndim(q) == 1 and lat is not None and normal is not None and xc.size:
             # the usual case (the cells of a state, points on its lattice) in one compiled pass
