@@ -48,13 +48,14 @@ def best_of(f, repeat):
 
 
 def main(argv=None):
-    from halfslip.solvers._toeplitz import GAP_CELLS, ISLAND_COST, ToeplitzLattice, _gap_solve, _island_solve
+    from halfslip.solvers._toeplitz import (GAP_CELLS, GAP_CUBE, GAPS, ISLAND_COST, ISLANDS, ToeplitzLattice,
+                                            _gap_solve, _island_solve, route)
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=30)
     parser.add_argument("--no-doc", action="store_true")
     args = parser.parse_args(argv)
-    lat = ToeplitzLattice(1e-6, 1600, 1e-11)
+    lat = ToeplitzLattice(1e-6, 1800, 1e-11)
     rng = np.random.default_rng(0)
     rows = []
     for longest in (200, 440, 800):
@@ -70,10 +71,12 @@ def main(argv=None):
                     raise SystemExit(f"the two routes disagree by {agree:.2e} at {runs.tolist()}")
                 t_i = best_of(lambda: _island_solve(lat.tables, runs, 1, ones), args.repeat)
                 t_g = best_of(lambda: _gap_solve(lat.tables, runs, rhs), args.repeat)
-                chosen = "islands" if ISLAND_COST * islands <= gap or gap > GAP_CELLS else "gaps"
+                way = route(runs)[0]
+                chosen = "islands" if way == ISLANDS else "gaps" if way == GAPS else "CG"
                 rows.append((longest, gap, islands, t_i, t_g, chosen, agree))
                 print(f"longest {longest:4d}  gap {gap:4d}  islands {islands:3d}:  islands {t_i:.3f} ms  "
                       f"gaps {t_g:.3f} ms  -> {chosen}  (agree to {agree:.1e})")
+    cg_rows = gaps_against_cg(lat, rng, args.repeat)
     if args.no_doc:
         return
     lines = [BEGIN, "",
@@ -82,14 +85,50 @@ def main(argv=None):
              "a stick set of one island run and one run of `longest` cells, a column of ones and two "
              "right-hand sides (compiled), solved "
              "through the islands' Schur complement and through the gaps'. The solver takes the islands' "
-             f"when the gaps hold at least ISLAND_COST = {ISLAND_COST} cells per island cell (or more than "
-             f"GAP_CELLS = {GAP_CELLS}).", "",
+             f"when the gaps hold at least ISLAND_COST = {ISLAND_COST} cells per island cell (or when the gaps' "
+             "complement costs more than CG, below) (`_toeplitz.route`).", "",
              "| longest run | gap cells | island cells | islands [ms] | gaps [ms] | taken |",
              "|---:|---:|---:|---:|---:|---|"]
     for longest, gap, islands, t_i, t_g, chosen, _ in rows:
         lines.append(f"| {longest} | {gap} | {islands} | {t_i:.3f} | {t_g:.3f} | {chosen} |")
+    lines += ["", "Two long runs and one gap (the split stick zones of the random histories at 2048 nodes: "
+              "gaps of 180-350 cells in spans of about 1500 on Hertz), solved through the gaps' complement "
+              "and by block-Jacobi CG: the solver takes the gaps' while they hold at most GAP_CELLS = "
+              f"{GAP_CELLS} cells or (gap cells)^3 <= GAP_CUBE x span, GAP_CUBE = {GAP_CUBE:g}.", "",
+              "| span | gap cells | gaps [ms] | CG [ms] | CG iterations | taken |",
+              "|---:|---:|---:|---:|---:|---|"]
+    for span, gap, t_g, t_c, it, chosen in cg_rows:
+        lines.append(f"| {span} | {gap} | {t_g:.3f} | {t_c:.3f} | {it} | {chosen} |")
     lines += ["", END]
     write_section(DOC, BEGIN, END, "\n".join(lines), "Stick sets of several runs: the two Schur complements")
+
+
+def gaps_against_cg(lat, rng, repeat):
+    """Two runs split by one gap, across spans and gap sizes: the gaps' complement against CG, and the route
+    the solver takes (_toeplitz.route)."""
+    from halfslip.solvers._toeplitz import CG, GAPS, _cg_runs, _gap_solve, _with_ones, route
+
+    rows = []
+    for span in (800, 1600):
+        for gap in (120, 160, 240, 320, 480):
+            left = (span - gap) // 2
+            runs = np.array([(0, left), (left + gap, span)], np.int64)
+            m, spec = lat._circulant(span)
+            rhs = rng.standard_normal((span - gap, 2))
+            ones = _with_ones(rhs)
+            by_gaps = _gap_solve(lat.tables, runs, rhs)
+            by_cg, it = _cg_runs(lat.tables, spec, m, runs, ones, 1e-13, 200)
+            agree = float(np.max(np.abs(by_cg - by_gaps)) / np.max(np.abs(by_gaps)))
+            if not agree < 1e-11:
+                raise SystemExit(f"the gaps' complement and CG disagree by {agree:.2e} at {runs.tolist()}")
+            t_g = best_of(lambda: _gap_solve(lat.tables, runs, rhs), repeat)
+            t_c = best_of(lambda: _cg_runs(lat.tables, spec, m, runs, ones, 1e-13, 200), repeat)
+            way = route(runs)[0]
+            chosen = "gaps" if way == GAPS else "CG" if way == CG else "other"
+            rows.append((span, gap, t_g, t_c, it, chosen))
+            print(f"span {span:5d}  gap {gap:4d}:  gaps {t_g:.3f} ms  CG {t_c:.3f} ms ({it} iterations)  -> "
+                  f"{chosen}  (agree to {agree:.1e})")
+    return rows
 
 
 if __name__ == "__main__":

@@ -311,7 +311,8 @@ RUNS = {
     "islands": [(0, 5), (100, 229), (290, 291)],                      # 6 cells beside the longest run: Schur
     "island-gap": [(0, 20), (110, 400)],                              # 20 island cells, 90 gap cells: the gaps'
     "cg": [(0, 30), (200, 229), (400, 430)],                          # gaps of 341 > GAP_CELLS: CG, runs dense
-    "cg-long": [(0, 140), (310, 480)],                                # CG with FFT solves on both runs
+    "cg-long": [(0, 140), (400, 490)],                                # CG with FFT solves on both runs
+    "gaps-cubic": [(0, 140), (310, 480)],                             # 170 gap cells, 170^3 <= GAP_CUBE x 480
 }
 
 
@@ -375,6 +376,8 @@ def test_solve_runs_is_the_dense_solve_on_the_stick_set(lattice, case):
     ([(0, 4), (200, 460)], tz.ISLANDS),                # gaps beyond GAP_CELLS: the islands' whatever
     ([(0, 40), (50, 120), (130, 131), (140, 200)], tz.GAPS),  # more island cells than gap cells
     ([(0, 30), (200, 229), (400, 430)], tz.CG),        # 341 gap cells, 59 island cells
+    ([(0, 140), (310, 480)], tz.GAPS),                 # 170 gap cells > GAP_CELLS, but 170^3 <= GAP_CUBE x 480
+    ([(0, 140), (400, 490)], tz.CG),                   # 260^3 > GAP_CUBE x 490
     ([(3, 90)], tz.ONE_RUN),
 ])
 def test_solve_runs_takes_the_cheaper_schur_complement(lattice, runs, way):

@@ -135,6 +135,16 @@ ISLAND_COST = 5
 #: 240 19.8; 48 (CG from there, before 0.3.5) 23.3.
 GAP_CELLS = 160
 
+#: ... or while (gap cells)^3 is at most GAP_CUBE times the span's cells: the complement's factorisation,
+#: (gap cells)^3 / 3 operations, against CG's five to seven iterations of a solve per run and a product over
+#: the span (0.4.3, with the gaps' second route below; two runs and one gap, a column of ones and one or two
+#: right-hand sides, one process, benchmarks/bench_solve_routes.py): span 800, the same cost at 240 gap cells
+#: (0.62 / 0.63 ms, 0.72 / 0.72 in another run), CG 2.2x faster at 320; span 1600, the gaps' 0.80 / 1.28 ms
+#: against CG's 1.69 / 1.45 ms at 240 / 320 gap cells, CG 2.8x faster at 480. The cost model (gaps about
+#: 2.7e-8 ms (gap cells)^3 + 0.4 us a span cell, CG about 1.2 us a span cell) has them equal at about 3e4;
+#: 2e4 keeps to the side of CG where the two are close.
+GAP_CUBE = 2.0e4
+
 #: The gaps' complement from this many gap cells on takes the span inverse's columns on the gap rows only
 #: (:func:`_gap_block`, O(gap cells^2)) and corrects the span's solution by a second solve, T^-1 (E_Z s), instead
 #: of forming the columns over the whole span (O(span) each) and their product with s (0.4.3). Measured with
@@ -804,11 +814,13 @@ def route(runs):  # pragma: no cover - compiled
             longest, most = r, length
     if runs.shape[0] == 1:
         return ONE_RUN, 0
-    gaps = (runs[-1, 1] - runs[0, 0]) - size
+    span = runs[-1, 1] - runs[0, 0]
+    gaps = span - size
     islands = size - most
-    if islands <= ISLAND_CELLS and (ISLAND_COST * islands <= gaps or gaps > GAP_CELLS):
+    affordable = gaps <= GAP_CELLS or float(gaps) ** 3 <= GAP_CUBE * span  # the gaps' complement
+    if islands <= ISLAND_CELLS and (ISLAND_COST * islands <= gaps or not affordable):
         return ISLANDS, longest
-    if gaps <= GAP_CELLS:
+    if affordable:
         return GAPS, longest
     return CG, longest
 
