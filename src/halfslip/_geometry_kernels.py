@@ -238,14 +238,23 @@ def _contact_moments(x0, d, breaks, lower, upper, coeffs, origins, slope_moments
     and _moments_from, the same operations): the slope moments (3,), the curvature moments (4,) and the
     slope moments' magnitude (3,). The normal problem's Newton iteration asks for them at every trial
     point, where the dozen numpy calls around the two kernels cost more than the kernels."""
+    D, value, curvature, c2, _, _ = _contact_pieces(x0, d, breaks, lower, upper, coeffs, origins)
+    slope, curv, magnitude = _moments_kernel(D, value, curvature, c2, np.full(1, d), slope_moments,
+                                             curvature_moments)
+    return slope[0], curv[0], magnitude[0]
+
+
+@numba.njit(cache=True)
+def _contact_pieces(x0, d, breaks, lower, upper, coeffs, origins):  # pragma: no cover - compiled
+    """geometry._piece_integrals of the one contact [x0 - d, x0 + d]: the cos integrals (1, J, 6) and the
+    polynomials' value, curvature and c2 (1, J) on the J pieces it meets, pieces first .. last - 1 (the breaks
+    strictly inside it are first .. last - 2)."""
     left, right = x0 - d, x0 + d
     first = np.searchsorted(breaks, left, side="right")
     last = np.searchsorted(breaks, right, side="left") + 1
     D = _cos_integrals(np.full(1, left), np.full(1, right), lower[first:last], upper[first:last])
     value, curvature, c2 = _piece_polynomials(np.full(1, x0), origins[first:last], coeffs[first:last])
-    slope, curv, magnitude = _moments_kernel(D, value, curvature, c2, np.full(1, d), slope_moments,
-                                             curvature_moments)
-    return slope[0], curv[0], magnitude[0]
+    return D, value, curvature, c2, first, last
 
 
 @numba.njit(cache=True)
@@ -255,11 +264,7 @@ def _contact_solution(x0, d, breaks, lower, upper, coeffs, origins, slope_moment
     as _piece_integrals, _moments_from and _ContactPressure.from_integrals): the slope moment I_0, the terms
     of the pressure's smooth coefficients over the pieces met (c0 = d sum terms0, c1 = d^2 sum terms1; the
     caller sums them as numpy does) and the range [klo, khi) of the breaks strictly inside the contact."""
-    left, right = x0 - d, x0 + d
-    first = np.searchsorted(breaks, left, side="right")
-    last = np.searchsorted(breaks, right, side="left") + 1
-    D = _cos_integrals(np.full(1, left), np.full(1, right), lower[first:last], upper[first:last])
-    value, curvature, c2 = _piece_polynomials(np.full(1, x0), origins[first:last], coeffs[first:last])
+    D, value, curvature, c2, first, last = _contact_pieces(x0, d, breaks, lower, upper, coeffs, origins)
     slope, _, _ = _moments_kernel(D, value, curvature, c2, np.full(1, d), slope_moments, curvature_moments)
     J = value.shape[1]
     terms0 = np.empty(J)
@@ -267,9 +272,7 @@ def _contact_solution(x0, d, breaks, lower, upper, coeffs, origins, slope_moment
     for j in range(J):
         terms0[j] = curvature[0, j] * D[0, j, 0] + c2[0, j] * d * D[0, j, 1]
         terms1[j] = c2[0, j] * D[0, j, 0]
-    klo = np.searchsorted(breaks, left, side="right")
-    khi = np.searchsorted(breaks, right, side="left")
-    return slope[0, 0], terms0, terms1, klo, khi
+    return slope[0, 0], terms0, terms1, first, last - 1
 
 
 _EPS = float(np.finfo(np.float64).eps)
