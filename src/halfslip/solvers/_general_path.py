@@ -188,6 +188,14 @@ class EdgePath:
         """"symmetric", "formation" or "hermite": how the edges are represented (the class's notes)."""
         return self._kind
 
+    def hermite_arguments(self, side: int) -> tuple:
+        """The arguments of :func:`_hermite_strain` (and :func:`hermite_integrals`) from ``lam_lo`` to ``newton``
+        for the ``side`` edge of a hermite path."""
+        (v0, dh, v1), h0, ext = self._side(side)
+        left, right = self.start()
+        return (self.lam_lo, left, right, self._h0, self._v0, self._h1, self._v1, h0, v0, dh, v1, ext,
+                EXTREMUM_MARGIN, BISECTION_STEPS, NEWTON_STEPS)
+
     def start(self) -> tuple[float, float]:
         """The edges at lam_lo (points strictly between them are in contact from the start)."""
         if self._start is None:
@@ -443,17 +451,52 @@ def arrival_strain_parts(path: EdgePath, x: np.ndarray, side: int, compliance: f
     x = np.asarray(x, dtype=float)
     if x.size == 0:
         return np.zeros((0, 2))
+    if path._kind == "hermite":
+        return _hermite_strain(np.ascontiguousarray(x), side, compliance, *path.hermite_arguments(side))
     lam_x = path.arrival(x, side)
     span = lam_x - path.lam_lo
     back = span[:, None] * _U**2
     lam = lam_x[:, None] - back  # (n, k)
     left, right = path.edges(lam)
-    gl, gr = x[:, None] - left, x[:, None] - right
-    if path._kind == "hermite":
-        (v0, dh, v1), h0, _ = path._side(side)
-        gap = _hermite_gap(x, lam_x, back, side, h0, v0, dh, v1)
-        gl, gr = (gap, gr) if side < 0 else (gl, gap)
-    return _strain_sum(x, left, right, gl, gr, span, _U, _W, compliance * side)
+    return _strain_sum(x, left, right, x[:, None] - left, x[:, None] - right, span, _U, _W, compliance * side)
+
+
+@numba.njit(cache=True)
+def _hermite_strain(x, side, A, lam_lo, start_left, start_right, h0, v0, h1, v1, side_h0, side_v0, side_dh,
+                    side_v1, ext, margin, steps, newton):  # pragma: no cover - compiled
+    """:func:`arrival_strain_parts` on a hermite path in one pass: each point's arrival (the bisection's limit,
+    :func:`_hermite_arrivals`; lam_lo inside the contact at the start, (start_left, start_right)), the edges at
+    the nodes lam_x - span u^2, the gap to the arriving edge from its divided difference
+    (:func:`_hermite_gap`) and the strain sums (:func:`_strain_sum`). ``h0`` .. ``v1`` the edges' ends and
+    rates (left, right), ``side_h0`` .. ``side_v1`` the ``side`` edge's start, rate, motion and end rate, ``ext``
+    its extrema (EdgePath.hermite_arguments)."""
+    r = np.empty(x.size)
+    for k in range(x.size):
+        r[k] = side * (side_h0 - x[k])
+    lam_x = _hermite_arrivals(side * side_v0, side * side_dh, side * side_v1, r, lam_lo, ext, margin, steps, newton)
+    for k in range(x.size):
+        if start_left < x[k] < start_right:
+            lam_x[k] = lam_lo
+    u = _U
+    span = np.empty(x.size)
+    back = np.empty((x.size, u.size))
+    lam = np.empty(x.size * u.size)
+    for k in range(x.size):
+        span[k] = lam_x[k] - lam_lo
+        for j in range(u.size):
+            back[k, j] = span[k] * u[j] ** 2
+            lam[k * u.size + j] = lam_x[k] - back[k, j]
+    left, right = _hermite_edges(lam, h0, v0, h1, v1)
+    left = left.reshape((x.size, u.size))
+    right = right.reshape((x.size, u.size))
+    gl = np.empty((x.size, u.size))
+    gr = np.empty((x.size, u.size))
+    for k in range(x.size):
+        for j in range(u.size):
+            gl[k, j] = x[k] - left[k, j]
+            gr[k, j] = x[k] - right[k, j]
+    gap = _hermite_gap(x, lam_x, back, side, side_h0, side_v0, side_dh, side_v1)
+    return _strain_sum(x, left, right, gap if side < 0 else gl, gr if side < 0 else gap, span, u, _W, A * side)
 
 
 @numba.njit(cache=True)
@@ -461,9 +504,8 @@ def hermite_integrals(xs, edge, side, A, lam_lo, start_left, start_right, h0, v0
                       side_dh, side_v1, ext, margin, steps, newton, gauss_t, gauss_w):  # pragma: no cover - compiled
     """The arrival integrals of a hermite path from ``edge`` to each of ``xs`` (sorted outward on ``side``), per
     unit Q' and sigma', and the distance from the edge (columns 0, 1, 2; GeneralSolver's _integrate): on each
-    segment between consecutive points the Gauss-Legendre points ``gauss_t`` (weights ``gauss_w``) of
-    :func:`arrival_strain_parts`' strain, summed outward. One compiled pass of what that function and the
-    caller's segment sums do with arrays."""
+    segment between consecutive points the Gauss-Legendre points ``gauss_t`` (weights ``gauss_w``) of the
+    strain (:func:`_hermite_strain`, whose arguments these are), summed outward."""
     n, g = xs.size, gauss_t.size
     pts = np.empty(n * g)
     widths = np.empty(n)
@@ -474,33 +516,8 @@ def hermite_integrals(xs, edge, side, A, lam_lo, start_left, start_right, h0, v0
             pts[i * g + j] = a + (b - a) * gauss_t[j]
         widths[i] = abs(b - a)
         a = b
-    r = np.empty(pts.size)
-    for k in range(pts.size):
-        r[k] = side * (side_h0 - pts[k])
-    lam_x = _hermite_arrivals(side * side_v0, side * side_dh, side * side_v1, r, lam_lo, ext, margin, steps, newton)
-    for k in range(pts.size):
-        if start_left < pts[k] < start_right:
-            lam_x[k] = lam_lo
-    u = _U
-    span = np.empty(pts.size)
-    back = np.empty((pts.size, u.size))
-    lam = np.empty(pts.size * u.size)
-    for k in range(pts.size):
-        span[k] = lam_x[k] - lam_lo
-        for j in range(u.size):
-            back[k, j] = span[k] * u[j] ** 2
-            lam[k * u.size + j] = lam_x[k] - back[k, j]
-    left, right = _hermite_edges(lam, h0, v0, h1, v1)
-    left = left.reshape((pts.size, u.size))
-    right = right.reshape((pts.size, u.size))
-    gl = np.empty((pts.size, u.size))
-    gr = np.empty((pts.size, u.size))
-    for k in range(pts.size):
-        for j in range(u.size):
-            gl[k, j] = pts[k] - left[k, j]
-            gr[k, j] = pts[k] - right[k, j]
-    gap = _hermite_gap(pts, lam_x, back, side, side_h0, side_v0, side_dh, side_v1)
-    inc = _strain_sum(pts, left, right, gap if side < 0 else gl, gr if side < 0 else gap, span, u, _W, A * side)
+    inc = _hermite_strain(pts, side, A, lam_lo, start_left, start_right, h0, v0, h1, v1, side_h0, side_v0, side_dh,
+                          side_v1, ext, margin, steps, newton)
     out = np.empty((n, 3))
     c0 = c1 = c2 = 0.0
     for i in range(n):

@@ -64,8 +64,7 @@ from .._geometry_kernels import _load_to_terms, _pressure_at
 from ..geometry import NormalProblem, NormalSolution
 from ..state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime, StepReport
 from ..state import frozen as _frozen
-from ._general_path import (BISECTION_STEPS, EXTREMUM_MARGIN, NEWTON_STEPS, EdgePath, arrival_strain_parts,
-                            hermite_integrals)
+from ._general_path import EdgePath, arrival_strain_parts, hermite_integrals
 from . import _toeplitz
 from ._toeplitz import ToeplitzLattice, _end_matvec, _G, _run_array, _run_bounds, kernel, stick_solve, table_products
 from .base import BACKWARD_SLIP, FORWARD_SLIP, OUT_OF_CONTACT, STICK, TangentialSolver
@@ -925,31 +924,33 @@ class GeneralSolver(TangentialSolver):
         the pressure over their supports (:func:`_end_supports`). ``q`` of shape (n,) or (n, k). At points of
         the state's lattice (every use in a step: arrived, leaving and match points) one compiled pass,
         :func:`_displaced`; elsewhere the kernel's products and the end cells' columns."""
+        xs = np.ascontiguousarray(xs, dtype=float)
+        first = int(round(xc[0] / spacing - 0.5)) if xc.size else 0
+        ends = _end_supports(normal, first, xc.size, spacing)
         lat = self._lattices.get(spacing)
-        if np.ndim(q) == 1 and lat is not None and normal is not None and xc.size:
+        if np.ndim(q) == 1 and lat is not None and ends:
             # the usual case (the cells of a state, points on its lattice) in one compiled pass
-            xs = np.ascontiguousarray(xs, dtype=float)
             span, ri, ci = _lattice_indices(xs, np.ascontiguousarray(xc, dtype=float), spacing, LATTICE_POINT)
             if span:
-                first = int(round(xc[0] / spacing - 0.5))
-                cells = [(k, self._end_cell(normal, first, k, a, b, spacing))
-                         for k, a, b in _end_supports(normal, first, xc.size, spacing)]
-                datum = (self.A / math.pi) * spacing * math.log(self.datum / lat.datum) * float(np.sum(q))
-                one, two = cells[0][1], cells[-1][1]
+                cells = [self._end_cell(normal, first, k, a, b, spacing) for k, a, b in ends]
                 out, done = _displaced(shift, lat._kernel_to(span), ri, ci, np.ascontiguousarray(q, dtype=float),
-                                       datum, 0.25 * self.A * sigma, xs, -(self.A / math.pi),
-                                       np.array([k for k, _ in cells], np.int64), one.kernel_arguments(),
-                                       two.kernel_arguments(), END_CELL_NEAR, LATTICE_POINT)
+                                       self._datum_factor(spacing, lat) * float(np.sum(q)), 0.25 * self.A * sigma,
+                                       xs, -(self.A / math.pi), np.array([k for k, _, _ in ends], np.int64),
+                                       cells[0].kernel_arguments(), cells[-1].kernel_arguments(), END_CELL_NEAR,
+                                       LATTICE_POINT)
                 if done:
                     return out
         bulk = 0.25 * self.A * sigma * xs
         out = shift - self._products(xs, xc, spacing, q) + (bulk[:, None] if np.ndim(q) == 2 else bulk)
-        if normal is not None and xc.size:
-            first = int(round(xc[0] / spacing - 0.5))
-            ends = _end_supports(normal, first, xc.size, spacing)
-            C = self._end_columns(normal, first, spacing, ends, np.asarray(xs, dtype=float))
+        if ends:
+            C = self._end_columns(normal, first, spacing, ends, xs)
             out = out - C @ q[[k for k, _, _ in ends]]
         return out
+
+    def _datum_factor(self, h: float, lat: ToeplitzLattice) -> float:
+        """(A/pi) h ln(l / l_int): what a unit of the cells' summed shear adds to the displacement in the
+        package's datum l over the lattice's internal one (its kernel table's)."""
+        return (self.A / math.pi) * h * math.log(self.datum / lat.datum)
 
     def _end_cell(self, normal, first: int, k: int, a: float, b: float, h: float) -> "_EndCell":
         """The end cell k (of a state whose cells start at lattice index ``first``) with support [a, b], kept."""
@@ -996,7 +997,7 @@ class GeneralSolver(TangentialSolver):
         q2 = q2[:, None] if q2.ndim == 1 else np.ascontiguousarray(q2)
         out = table_products(lat._kernel_to(span), ri, ci, q2)
         # the table's datum is the lattice's: t_l = t_int + (A/pi) h ln(l / l_int)
-        out += (self.A / math.pi) * spacing * math.log(self.datum / lat.datum) * q2.sum(axis=0)[None, :]
+        out += self._datum_factor(spacing, lat) * q2.sum(axis=0)[None, :]
         return out[:, 0] if np.ndim(q) == 1 else out
 
     def _separate(self, state, t1, loads1):
@@ -1319,11 +1320,8 @@ def _integrate(path: EdgePath, xs: np.ndarray, edge: float, side: int, A: float,
         xsorted = xs[order]
         parts = np.empty((xs.size, 3))
         if path.kind == "hermite" and xs.size:
-            (v0, dh, v1), h0, ext = path._side(side)
-            left, right = path.start()
-            parts[order] = hermite_integrals(np.ascontiguousarray(xsorted), edge, side, A, path.lam_lo, left, right,
-                                             path._h0, path._v0, path._h1, path._v1, h0, v0, dh, v1, ext,
-                                             EXTREMUM_MARGIN, BISECTION_STEPS, NEWTON_STEPS, _GL_T, _GL_W)
+            parts[order] = hermite_integrals(np.ascontiguousarray(xsorted), edge, side, A,
+                                             *path.hermite_arguments(side), _GL_T, _GL_W)
         else:
             ends = np.concatenate(([edge], xsorted))
             a, b = ends[:-1], ends[1:]
@@ -1774,8 +1772,8 @@ class _EndCell:
     x0))^k / k, whose ln cancels between the two (the same force) and whose k-th term is the difference of
     the k-th moments. What depends on the cell only (the rule, the moments, the value at the cell's own
     centre) is found once: a state's end cells are asked again at every take of the step and by the next.
-    Compiled since 0.4.2 but for the pressure (:func:`_end_cell_rule`, :func:`_end_cell_setup`): 47 -> 19 us
-    a cell, 7-9 % of a step on the random histories at 1024 nodes.
+    Compiled (:func:`_end_cell_build`): since 0.4.2 but for the pressure, 47 -> 19 us a cell, 7-9 % of a step
+    on the random histories at 1024 nodes; with the pressure since 0.4.3.
     """
 
     def __init__(self, normal, a: float, b: float, lo: float, h: float, kinks: np.ndarray):
@@ -1792,24 +1790,15 @@ class _EndCell:
             normal.pressure_arguments(), h, a, b, END_CELL_TERMS)
         self.own = at_own if own else None
 
-    def _rule(self, breaks, at=None):
-        """Points, pressure and weights of int dxi over the pieces between ``breaks`` (and the pressure at
-        ``at`` last, when given)."""
-        xi, dxi = _end_cell_rule(np.asarray(breaks, dtype=float), self.normal.center, self.normal.half_width,
-                                 _EC_S, _EC_DS)
-        return xi, self.normal.pressure(xi if at is None else np.append(xi, at)), dxi
-
     def kernel_arguments(self) -> tuple:
-        """:func:`_end_cell_kernel`'s arguments after the points and before ``near`` and ``tol``."""
+        """:func:`_end_cell_kernel`'s arguments between the points and ``near``."""
         return (self.x0, self.h, self.lo, self.a, self.b, self.series, self.xi, self.w,
                 math.nan if self.own is None else self.own)
 
     def potential(self, xs: np.ndarray) -> np.ndarray:
         """The difference of the two log potentials at ``xs``."""
         xs = np.ascontiguousarray(xs, dtype=float)
-        out, rest = _end_cell_kernel(xs, self.x0, self.h, self.lo, self.a, self.b, self.series, self.xi, self.w,
-                                     END_CELL_NEAR, math.nan if self.own is None else self.own,
-                                     LATTICE_POINT)
+        out, rest = _end_cell_kernel(xs, *self.kernel_arguments(), END_CELL_NEAR, LATTICE_POINT)
         if rest.size:
             out[rest] = self._inside(xs[rest])
         return out
@@ -1818,8 +1807,9 @@ class _EndCell:
         """The potentials at points inside the support other than the cell's centre (rare: the lattice's
         points inside an end cell's support are its own centre): the rule cut at each of them."""
         part = np.empty(xn.size)
+        cuts, N = np.array(self.cuts), self.normal
         for i, x in enumerate(xn.tolist()):
-            xj, pj, dj = self._rule(sorted(self.cuts + [x]), x)
+            xj, pj, dj = _cut_rule(cuts, x, True, N.center, N.half_width, _EC_S, _EC_DS, N.pressure_arguments())
             part[i] = _shaped_at(x, xj, pj, dj, self.scale, self.a, self.b)
         return part - (_G(xn - self.lo) - _G(xn - self.lo - self.h))
 
@@ -1837,8 +1827,10 @@ def _displaced(shift, t, ri, ci, q, datum, bulk, xs, scale, ends, one, two, near
         out[i] = (shift - (out[i] + datum)) + bulk * xs[i]
     corr = np.zeros(n)  # the end cells' columns times their shear, summed over the cells
     for c in range(ends.size):
-        x0, h, lo, a, b, series, xi, w, own = one if c == 0 else two
-        pot, rest = _end_cell_kernel(xs, x0, h, lo, a, b, series, xi, w, near, own, tol)
+        if c == 0:
+            pot, rest = _end_cell_kernel(xs, *one, near, tol)
+        else:
+            pot, rest = _end_cell_kernel(xs, *two, near, tol)
         if rest.size:
             return out, False
         qc = q[ends[c]]
@@ -1873,29 +1865,38 @@ def _end_cell_build(cuts, x0, own, c, d, S, DS, pressure, h, a, b, terms):  # pr
     _geometry_kernels._pressure_at's arguments) and :func:`_end_cell_setup`. Returns the points, the weights
     of the force h, their scale, the multipole coefficients and the shaped potential at x0 (NaN unless
     ``own``)."""
-    if own:
-        breaks = np.empty(cuts.size + 1)  # x0 among the cuts, after any equal to it (as sorted() puts it)
+    xi, p, dxi = _cut_rule(cuts, x0, own, c, d, S, DS, pressure)
+    w, scale, series, shaped = _end_cell_setup(xi, p, dxi, x0, h, a, b, own, terms)
+    return xi, w, scale, series, shaped
+
+
+@numba.njit(cache=True)
+def _cut_rule(cuts, at, cut, c, d, S, DS, pressure):  # pragma: no cover - compiled
+    """_EndCell's rule (:func:`_end_cell_rule`) over the pieces between ``cuts``, also cut at ``at`` where
+    ``cut`` (a point inside the support: the cell's centre, or a point :meth:`_EndCell._inside` asks for), and
+    the pressure at its points (``pressure``: _geometry_kernels._pressure_at's arguments), at ``at`` last where
+    ``cut``: the points, the pressure and the weights."""
+    if cut:
+        breaks = np.empty(cuts.size + 1)  # at among the cuts, after any equal to it (as sorted() puts it)
         k = 0
         placed = False
         for i in range(cuts.size):
-            if not placed and cuts[i] > x0:
-                breaks[k] = x0
+            if not placed and cuts[i] > at:
+                breaks[k] = at
                 k += 1
                 placed = True
             breaks[k] = cuts[i]
             k += 1
         if not placed:
-            breaks[k] = x0
+            breaks[k] = at
     else:
         breaks = cuts
     xi, dxi = _end_cell_rule(breaks, c, d, S, DS)
-    at = np.empty(xi.size + 1 if own else xi.size)
-    at[:xi.size] = xi
-    if own:
-        at[xi.size] = x0
-    p = _pressure_at(at, *pressure)
-    w, scale, series, shaped = _end_cell_setup(xi, p, dxi, x0, h, a, b, own, terms)
-    return xi, w, scale, series, shaped
+    points = np.empty(xi.size + 1 if cut else xi.size)
+    points[:xi.size] = xi
+    if cut:
+        points[xi.size] = at
+    return xi, _pressure_at(points, *pressure), dxi
 
 
 @numba.njit(cache=True)
@@ -1948,7 +1949,7 @@ def _end_cell_series(xi, w, x0, h, terms):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
-def _end_cell_kernel(xs, x0, h, lo, a, b, series, xi, w, near, own, tol):  # pragma: no cover - compiled
+def _end_cell_kernel(xs, x0, h, lo, a, b, series, xi, w, own, near, tol):  # pragma: no cover - compiled
     """_EndCell.potential at ``xs``: the multipole series beyond ``near`` cells of x0, the rule's sum
     nearer, ``own`` at the cell's centre; the indices of the other points inside (a, b), left for the
     caller (their out is not set)."""
