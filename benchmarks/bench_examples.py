@@ -4,7 +4,9 @@
     python benchmarks/bench_examples.py --against e72f96e     # and that git revision, alternating
 
 Each example scene goes through ``halfslip.simulate`` (start-up, marching and
-the stored fields, as ``halfslip run`` does, without writing the file): one
+the stored fields, as ``halfslip run`` does, without writing the file), and the
+solver's ``step()`` alone is timed over a second run in the same process (the
+marching without start-up, numba's loading of its kernels and output): one
 untimed run first (numba compiles and caches its kernels), then ``--repeat``
 timed runs; the table gives the median and the time per marched step. With
 ``--against REV`` the same scenes run with the package of that revision (a
@@ -37,12 +39,28 @@ EXAMPLES = ["dovetail", "hertz_pad", "motor", "tabulated"]
 _WORKER = """
 import json, sys, time
 import halfslip
+from halfslip.solvers.exact import ExactMemory
+from halfslip.solvers.general import GeneralSolver
 scene = halfslip.load_scene(sys.argv[1])
 t = time.perf_counter()
 result = halfslip.simulate(scene)
 wall = time.perf_counter() - t
+# the solver's step() alone, in the same process after that run: the marching without start-up and output
+spent = [0.0, 0]
+def timed(step):
+    def wrapper(self, *args, **kwargs):
+        t = time.perf_counter()
+        try:
+            return step(self, *args, **kwargs)
+        finally:
+            spent[0] += time.perf_counter() - t
+            spent[1] += 1
+    return wrapper
+for cls in (ExactMemory, GeneralSolver):
+    cls.step = timed(cls.step)
+halfslip.simulate(scene)
 print(json.dumps({"wall": wall, "steps": int(result.attrs["count_steps"]), "method": str(result.attrs["method"]),
-                  "dissipation": float(result["dissipation"].values[-1])}))
+                  "dissipation": float(result["dissipation"].values[-1]), "step": spent[0] / max(spent[1], 1)}))
 """
 
 
@@ -67,13 +85,16 @@ def measure(trees: dict[str, Path], repeat: int, examples: list[str]) -> dict:
         for src in trees.values():
             _run(src, scene)  # compile and cache the kernels; warm the file cache
         walls: dict[str, list[float]] = {label: [] for label in trees}
+        steps: dict[str, list[float]] = {label: [] for label in trees}
         last: dict[str, dict] = {}
         for _ in range(repeat):
             for label, src in trees.items():
                 got = _run(src, scene)
                 walls[label].append(got["wall"])
+                steps[label].append(got["step"])
                 last[label] = got
-        out[name] = {label: dict(last[label], wall=_median(walls[label]), walls=walls[label]) for label in trees}
+        out[name] = {label: dict(last[label], wall=_median(walls[label]), walls=walls[label],
+                                 step=_median(steps[label])) for label in trees}
         line = "; ".join(f"{label} {out[name][label]['wall']:.3f} s" for label in trees)
         print(f"{name}: {line}", flush=True)
     return out
@@ -89,8 +110,9 @@ def _machine() -> str:
 
 def write_doc(results: dict, trees: dict[str, Path], argv: list[str]) -> None:
     labels = list(trees)
-    head = "| example | method | steps | " + " | ".join(f"{label} [s] | {label} [ms / step]" for label in labels)
-    sep = "|---|---|---:|" + "---:|---:|" * len(labels)
+    head = "| example | method | steps | " + " | ".join(
+        f"{label} [s] | {label} [ms / step] | {label}: step() alone [ms / step]" for label in labels)
+    sep = "|---|---|---:|" + "---:|---:|---:|" * len(labels)
     if len(labels) == 2:
         head += f" | speed-up ({labels[0]} / {labels[1]}) | dissipation, relative difference"
         sep += "---:|---:|"
@@ -99,7 +121,8 @@ def write_doc(results: dict, trees: dict[str, Path], argv: list[str]) -> None:
         first = by[labels[0]]
         cells = [name, first["method"], str(first["steps"])]
         for label in labels:
-            cells += [f"{by[label]['wall']:.3f}", f"{1e3 * by[label]['wall'] / by[label]['steps']:.2f}"]
+            cells += [f"{by[label]['wall']:.3f}", f"{1e3 * by[label]['wall'] / by[label]['steps']:.2f}",
+                      f"{1e3 * by[label]['step']:.2f}"]
         if len(labels) == 2:
             a, b = by[labels[0]], by[labels[1]]
             cells.append(f"{a['wall'] / b['wall']:.2f}x")
@@ -110,10 +133,9 @@ def write_doc(results: dict, trees: dict[str, Path], argv: list[str]) -> None:
         BEGIN,
         f"`python benchmarks/{Path(__file__).name} {' '.join(argv)}`".replace(" `", "`"),
         f"({time.strftime('%Y-%m-%d')}; {_machine()}; median of the timed runs, each a whole "
-        "`halfslip.simulate` with start-up and stored fields, the trees alternating run by run)"
-        if len(labels) == 2 else
-        f"({time.strftime('%Y-%m-%d')}; {_machine()}; median of the timed runs, each a whole "
-        "`halfslip.simulate` with start-up and stored fields)",
+        "`halfslip.simulate` with start-up and stored fields in a fresh process"
+        + (", the trees alternating run by run" if len(labels) == 2 else "")
+        + "; step() alone: the solver's steps of a second run in the same process, per marched step)",
         "",
         *rows,
         END,

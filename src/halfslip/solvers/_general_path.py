@@ -101,6 +101,7 @@ class EdgePath:
         self.lam_lo = 0.0 if start is not None else max(0.0, P0 / (P0 - P1)) if P0 < P1 else 0.0
         self.solves = 0
         self._sides: dict[int, tuple] = {}
+        self._arguments: dict[int, tuple] = {}  # hermite_arguments per side
         #: arrival integrals already taken along this step (GeneralSolver's _integrate): another take of the
         #: same step asks for the same ones
         self.integrals: dict[tuple, np.ndarray] = {}
@@ -191,10 +192,13 @@ class EdgePath:
     def hermite_arguments(self, side: int) -> tuple:
         """The arguments of :func:`_hermite_strain` (and :func:`hermite_integrals`) from ``lam_lo`` to ``newton``
         for the ``side`` edge of a hermite path."""
-        (v0, dh, v1), h0, ext = self._side(side)
-        left, right = self.start()
-        return (self.lam_lo, left, right, self._h0, self._v0, self._h1, self._v1, h0, v0, dh, v1, ext,
-                EXTREMUM_MARGIN, BISECTION_STEPS, NEWTON_STEPS)
+        got = self._arguments.get(side)
+        if got is None:  # asked by every take of the step and by its arrivals' fit: kept
+            (v0, dh, v1), h0, ext = self._side(side)
+            left, right = self.start()
+            got = self._arguments[side] = (self.lam_lo, left, right, self._h0, self._v0, self._h1, self._v1, h0, v0,
+                                           dh, v1, ext, EXTREMUM_MARGIN, BISECTION_STEPS, NEWTON_STEPS)
+        return got
 
     def start(self) -> tuple[float, float]:
         """The edges at lam_lo (points strictly between them are in contact from the start)."""

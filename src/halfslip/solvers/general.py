@@ -806,17 +806,21 @@ class GeneralSolver(TangentialSolver):
         out = np.empty(xs.size)
         if mem.normal is not None:
             N0 = mem.normal
-            masks = {side: (xs < N0.center) if side < 0 else (xs >= N0.center) for side in (-1, 1)}
-            match = {side: xe for side, xe in _match_points(x, h).items() if np.any(masks[side])}
+            # x ascending: the cells left of the old contact's centre arrive at its left edge
+            split = int(np.searchsorted(xs, N0.center))
+            match = [(side, xe) for side, xe in _match_points(x, h).items()
+                     if (split if side < 0 else xs.size - split)]
             # the displacement at the start of the step, from the old shear, there and at the match points
-            at = np.concatenate([xs] + [np.array([xe]) for xe in match.values()])
+            at = np.empty(xs.size + len(match))
+            at[:xs.size] = xs
+            at[xs.size:] = [xe for _, xe in match]
             start = self._displacement(mem.shift, mem.x, mem.q, mem.spacing, loads0.sigma, at, mem.normal)
             g0 = start[:xs.size]
-            for side, xe in match.items():
+            for side, xe in match:
                 edge = N0.left if side < 0 else N0.right
-                mask = masks[side]
-                out[mask] = g0[mask] + side * _integrate(path, np.append(xs[mask], xe), edge, side, A, None)[:-1]
-            return out, g0, dict(zip(match, start[xs.size:].tolist()))
+                part = slice(0, split) if side < 0 else slice(split, xs.size)
+                out[part] = g0[part] + side * _integrate(path, np.append(xs[part], xe), edge, side, A, None)[:-1]
+            return out, g0, {side: float(v) for (side, _), v in zip(match, start[xs.size:])}
         lam0 = path.lam_lo
         left, right = path.edges(np.array(lam0))
         xf = 0.5 * (float(left) + float(right))
@@ -856,10 +860,24 @@ class GeneralSolver(TangentialSolver):
         t = lat.lat._kernel_to(n + ARRIVAL_MATCH + 1)
         first = round(x[0] / h - 0.5)
         ends = _end_supports(lat.normal, first, n, h)
-        for side, xe in _match_points(x, h).items():
-            arrived = ~known & ((x < N0.center) if side < 0 else (x >= N0.center))
-            if not np.any(arrived):
-                continue
+        new = ~known
+        # x ascending: the cells left of the old contact's centre arrive at its left edge
+        split = int(np.searchsorted(x, N0.center))
+        match = [(side, xe) for side, xe in _match_points(x, h).items()
+                 if np.any(new[:split] if side < 0 else new[split:])]
+        if not match:
+            return None
+        # T' at the match points: the end cells' columns at both in one pass
+        columns = self._end_columns(lat.normal, first, h, ends, np.array([xe for _, xe in match]))
+        at_ends = [k for k, _, _ in ends]
+        start = np.zeros(n)
+        start[new] = g0
+        for j, (side, xe) in enumerate(match):
+            arrived = new.copy()  # this side's
+            if side < 0:
+                arrived[split:] = False
+            else:
+                arrived[:split] = False
             edge = N0.left if side < 0 else N0.right
             # the shape's increments at the arrived cells and the match point (the quadrature of _arrivals)
             shaped = side * _integrate(path, np.append(x[arrived], xe), edge, side, A, None, ARRIVAL_SHAPE)
@@ -869,10 +887,10 @@ class GeneralSolver(TangentialSolver):
             shape = np.zeros(n)
             shape[arrived] = shaped[:-1]
             cur = np.zeros(n)
-            cur[arrived] = glock[arrived] - g0[arrived[~known]]
-            offset = np.arange(n) + ARRIVAL_MATCH if side < 0 else (n - 1 + ARRIVAL_MATCH) - np.arange(n)
-            row = t[offset].copy()
-            row[[k for k, _, _ in ends]] += self._end_columns(lat.normal, first, h, ends, np.array([xe]))[0]
+            cur[arrived] = glock[arrived] - start[arrived]
+            # the kernel from each cell to the match point ARRIVAL_MATCH cells beyond the first or last cell
+            row = (t[ARRIVAL_MATCH:n + ARRIVAL_MATCH] if side < 0 else t[ARRIVAL_MATCH:n + ARRIVAL_MATCH][::-1]).copy()
+            row[at_ends] += columns[j]
             side_of[arrived] = len(m1)
             now.append(cur)
             phi.append(shape)
@@ -896,8 +914,10 @@ class GeneralSolver(TangentialSolver):
         the start; none where that slip would oppose its shear.
         """
         lo, hi = mem.first, mem.first + mem.q.size
-        j = np.arange(lo, hi)
-        out = ((j < first) | (j >= first + n)) & (mem.status != 0)
+        if lo >= first and hi <= first + n:  # every old cell is still in contact
+            return 0.0
+        out = mem.status != 0
+        out[max(first - lo, 0):max(first + n - lo, 0)] = False  # those still in contact
         if not np.any(out):
             return 0.0
         xs = mem.x[out]
