@@ -1469,18 +1469,13 @@ def test_the_arrivals_sizes_match_the_lattice_and_the_pattern_together(monkeypat
     problem = NormalProblem(PROFILES["hertz"], A)
     solver = GeneralSolver(problem, F, 256)
     seen = []
-    fit_of, sizes_of = general_module.GeneralSolver._arrival_fit, general_module.GeneralSolver._active_set
+    sizes_of = general_module.GeneralSolver._active_set
     take = general_module.GeneralSolver._take
-
-    def arrival_fit(self, mem, lat, h, loads1, path, x, known, g0, before, glock, r0):
-        out = fit_of(self, mem, lat, h, loads1, path, x, known, g0, before, glock, r0)
-        seen.append({"fit": out, "x": x, "known": known, "g0": g0, "glock": glock})
-        return out
 
     def active_set(self, *args):
         out = sizes_of(self, *args)
-        if args[-1] is not None:
-            seen[-1]["sizes"] = out[-1]
+        if args[-1] is not None:  # the fit (_arrival_fit's, or _arrived's: the same numbers)
+            seen.append({"fit": args[-1], "sizes": out[-1]})
         return out
 
     def taking(self, mem, h, loads0, loads1, N1, path, load, hint=None, shadow=False):
@@ -1490,7 +1485,6 @@ def test_the_arrivals_sizes_match_the_lattice_and_the_pattern_together(monkeypat
             seen[-1].update(mem=mem, out=out, h=h, loads0=loads0, loads1=loads1, N1=N1)
         return out
 
-    monkeypatch.setattr(general_module.GeneralSolver, "_arrival_fit", arrival_fit)
     monkeypatch.setattr(general_module.GeneralSolver, "_active_set", active_set)
     monkeypatch.setattr(general_module.GeneralSolver, "_take", taking)
     state = solver.initial_state()
@@ -1501,12 +1495,16 @@ def test_the_arrivals_sizes_match_the_lattice_and_the_pattern_together(monkeypat
     assert len(fitted) >= 3
     for s in fitted:
         side_of, now, phi, K, e, m1 = s["fit"]
-        mem, out, h, x = s["mem"], s["out"], s["h"], s["x"]
+        mem, out, h = s["mem"], s["out"], s["h"]
         end = out.memory
+        x = end.x
         scale = A * F * float(end.capacity.max()) * h
-        arrived = ~s["known"]
+        # the cells beyond the old contact's, and their displacement at the step's start
+        cell = end.first + np.arange(x.size)
+        arrived = (cell < mem.first) | (cell >= mem.first + mem.q.size)
         g0 = np.zeros(x.size)
-        g0[arrived] = s["g0"]
+        g0[arrived] = solver._displacement(mem.shift, mem.x, mem.q, mem.spacing, s["loads0"].sigma, x[arrived],
+                                           mem.normal)
         for j, size in s["sizes"]:
             cells = np.flatnonzero(side_of == j)
             side = -1 if cells[0] < x.size // 2 else 1
@@ -1518,3 +1516,44 @@ def test_the_arrivals_sizes_match_the_lattice_and_the_pattern_together(monkeypat
             stuck = cells[end.status[cells] == 0]
             assert np.allclose(end.g[stuck], g0[stuck] + size * phi[j, stuck], rtol=0.0, atol=1e-9 * scale)
         assert out.residual <= 1.0
+
+
+@pytest.mark.parametrize("kind", ["hertz", "punch"])
+def test_the_compiled_arrivals_are_the_python_route(kind, monkeypatch):
+    """A growing contact's arrivals and their fit in one compiled pass (GeneralSolver._arrived, since 0.4.4;
+    every take on a hermite edge path) against the Python route it stands in for (_arrivals, then
+    _arrival_fit): the same operations in the same order, so the same numbers to the last bit - the arrived
+    cells' locks, their start displacements, the match points', and every array of the fit (at an r0 of the
+    test's choosing) - at every take of a history whose contact grows and shrinks under P, Q, M and sigma
+    while part of it slips (both lattices, sub-steps included)."""
+    problem = NormalProblem(PROFILES[kind], A)
+    solver = GeneralSolver(problem, F, 256)
+    arrived = general_module.GeneralSolver._arrived
+    compared = {"takes": 0, "fits": 0}
+
+    def checked(self, mem, N1, path, x, known, h, first, lat, glock):
+        before_glock = glock.copy()
+        got = arrived(self, mem, N1, path, x, known, h, first, lat, glock)
+        if got is None:
+            return got
+        g0, before, terms = got
+        locks, g0_ref, before_ref = self._arrivals(mem, path.loads0, path.loads1, N1, path, x, known, h)
+        before_glock[~known] = locks
+        assert np.array_equal(glock, before_glock) and np.array_equal(g0, g0_ref) and before == before_ref
+        r0 = 0.37 * float(np.max(np.abs(glock)))
+        fit, fit_ref = terms(r0), self._arrival_fit(mem, lat, h, path.loads1, path, x, known, g0_ref, before_ref,
+                                                    before_glock, r0)
+        assert (fit is None) == (fit_ref is None)
+        if fit is not None:
+            assert all(np.array_equal(a, b) for a, b in zip(fit, fit_ref))
+            compared["fits"] += 1
+        compared["takes"] += 1
+        return got
+
+    monkeypatch.setattr(general_module.GeneralSolver, "_arrived", checked)
+    scale = P0 * (1e-4 if kind == "hertz" else 2e-4)  # moments of about a tenth of the contact's half-width
+    path = [(P0, 0.3 * F * P0), (1.5 * P0, -0.2 * F * P0, 0.4 * scale, -3e7), (2.2 * P0, 0.5 * F * P0, -0.6 * scale,
+            4e7), (1.1 * P0, 0.1 * F * P0, 0.2 * scale, 0.0), (2.5 * P0, -0.6 * F * 2.5 * P0, 0.0, -2e7)]
+    for state, report in march(solver, path):
+        assert report.converged
+    assert compared["takes"] >= 10 and compared["fits"] >= 3, compared

@@ -670,9 +670,13 @@ class GeneralSolver(TangentialSolver):
         status, glock, G, cap0, known, start, arrived = _carried(
             first, n, mem.first, *((mem.status, mem.g, mem.G, mem.capacity) if old else _NOTHING_CARRIED),
             *(hint if hint is not None else (0, _NO_HINT)))
-        g0 = before = None
+        g0 = before = terms = None
         if arrived:
-            glock[~known], g0, before = self._arrivals(mem, loads0, loads1, N1, path, x, known, h)
+            terms = self._arrived(mem, N1, path, x, known, h, first, lat, glock) if old else None
+            if terms is not None:
+                g0, before, terms = terms
+            else:
+                glock[~known], g0, before = self._arrivals(mem, loads0, loads1, N1, path, x, known, h)
         sigma_term = 0.25 * A * loads1.sigma * x
         r = glock - sigma_term  # stick: (T q)_i - delta = -r_i
         qmax = f * cap
@@ -696,7 +700,9 @@ class GeneralSolver(TangentialSolver):
             gscale = A * float(qmax.max()) * h
             floor = ROUNDING * float(np.max(np.abs(r)))
             fit = None
-            if self.arrivals and old and g0 is not None and path is not None:
+            if terms is not None:  # _arrived's, less r0
+                fit = terms(r0)
+            elif self.arrivals and old and g0 is not None and path is not None:
                 fit = self._arrival_fit(mem, lat, h, loads1, path, x, known, g0, before, glock, r0)
             q, delta_int, status, Tq, iterations, restarts, sizes = self._active_set(
                 lat, n, r - r0, qmax, loads1.Q / h, start, gscale, floor, fit)
@@ -792,6 +798,41 @@ class GeneralSolver(TangentialSolver):
             status = _projected_gradient(lat, n, r, qmax, total, q)
 
     # -- arrivals ---------------------------------------------------------------
+    def _arrived(self, mem, N1, path, x, known, h, first, lat, glock):
+        """:meth:`_arrivals` and :meth:`_arrival_fit` in one compiled pass (:func:`_arrival_terms`, the same
+        numbers) where the old contact exists and the edge path is a hermite one: sets the arrived cells'
+        locks in ``glock`` and returns their start displacements, the match points' ({side: value}) and the
+        fit as a function of r0 (None: nothing fitted); None where the general path must take it."""
+        if path is None or path.kind != "hermite":
+            return None
+        N0, n = mem.normal, x.size
+        old_ends, new_ends = _end_supports(N0, mem.first, mem.q.size, h), _end_supports(N1, first, n, h)
+        if not old_ends or not new_ends:
+            return None
+        tab = lat.lat
+        # the kernel table reaches from the old cells to the match points and over the take's cells
+        span = max(first + n - 1 + ARRIVAL_MATCH - mem.first, mem.first + mem.q.size - 1 - first + ARRIVAL_MATCH)
+        t = tab._kernel_to(max(span + 1, n + ARRIVAL_MATCH + 1))
+        olds = [self._end_cell(N0, mem.first, k, a, b, h) for k, a, b in old_ends]
+        news = [self._end_cell(N1, first, k, a, b, h) for k, a, b in new_ends]
+        l0, l1 = path.loads0, path.loads1
+        ok, locks, g0, before, has, side_of, now, phi, K, cx, bef, m1, fitted = _arrival_terms(
+            x, known, first, h, self.A, N0.center, N0.left, N0.right, t, mem.shift, mem.q, mem.first,
+            self._datum_factor(h, tab) * float(np.sum(mem.q)), 0.25 * self.A * l0.sigma,
+            np.array([k for k, _, _ in old_ends], np.int64), olds[0].kernel_arguments(), olds[-1].kernel_arguments(),
+            END_CELL_NEAR, LATTICE_POINT, path.hermite_arguments(-1), path.hermite_arguments(1), _GL_T, _GL_W,
+            l1.Q - l0.Q, l1.sigma - l0.sigma, self.arrivals, np.array([k for k, _, _ in new_ends], np.int64),
+            news[0].kernel_arguments(), news[-1].kernel_arguments(), ARRIVAL_MATCH, *ARRIVAL_SHAPE,
+            0.25 * self.A * l1.sigma)
+        if not ok:
+            return None
+        glock[~known] = locks
+        before = {side: float(before[s]) for s, side in enumerate((-1, 1)) if has[s]}
+        if not fitted:
+            return g0, before, lambda r0: None
+        k = fitted
+        return g0, before, lambda r0: (side_of, now[:k], phi[:k], K[:k], r0 + cx[:k] - bef[:k], m1[:k])
+
     def _arrivals(self, mem: GeneralMemory, loads0: Loads, loads1: Loads, N1: NormalSolution,
                   path: EdgePath | None, x: np.ndarray, known: np.ndarray, h: float):
         """Locked displacement of the cells centred at ``x`` that enter the contact during the step (those not
@@ -1859,6 +1900,125 @@ def _displaced(shift, t, ri, ci, q, datum, bulk, xs, scale, ends, one, two, near
     for i in range(n):
         out[i] -= corr[i]
     return out, True
+
+
+@numba.njit(cache=True)
+def _arrival_terms(x, known, first, h, A, centre, edge_l, edge_r, t, shift0, q0, first0, datum0, bulk0, ends0,
+                   one0, two0, near, tol, args_l, args_r, gauss_t, gauss_w, dQ, dS, fit, ends1, one1, two1,
+                   match, shape_q, shape_s, c1):  # pragma: no cover - compiled
+    """GeneralSolver._arrivals and _arrival_fit in one pass where both contacts exist and the edge path is a
+    hermite one (every take of a growing contact but the step it forms in; :meth:`GeneralSolver._arrived`
+    gives the arguments). The arrived cells (not ``known``) left of the old contact's ``centre`` arrive at
+    its left edge, the others at its right; the match points lie ``match`` cells beyond the first and last
+    cell. The start displacement from the old shear ``q0`` (cells from lattice index ``first0``; ``datum0``,
+    ``bulk0``, ``ends0``, ``one0``, ``two0`` as :func:`_displaced`'s) at the arrived cells and the match points;
+    the arrival integrals of each side (:func:`hermite_integrals`, ``args_l`` / ``args_r`` the path's
+    hermite_arguments) give M1's locks (the load change ``dQ``, ``dS``) and, with ``fit``, the arrivals'
+    shape (``shape_q``, ``shape_s``) and T' at the match points (``t`` the lattice's kernel table, the take's
+    end cells ``ends1`` with their kernel arguments ``one1``, ``two1``), ``c1`` = A sigma1 / 4.
+
+    Returns ok (False: a point met an end cell's support; the caller's general path), the arrived cells'
+    locks and start displacements, the match points' start displacements and which sides have arrivals
+    ((2,) each), and the fit's per-cell side index, now, phi, K, the match points' c1 x and start
+    displacements and the shapes' units (one row per fitted side; the caller forms e with r0)."""
+    n = x.size
+    count = 0
+    for i in range(n):
+        if not known[i]:
+            count += 1
+    cells = np.empty(count, np.int64)
+    k = 0
+    for i in range(n):
+        if not known[i]:
+            cells[k] = i
+            k += 1
+    split = 0  # x ascending: the arrived cells left of the old centre come first
+    while split < count and x[cells[split]] < centre:
+        split += 1
+    has = np.zeros(2, np.bool_)
+    has[0], has[1] = split > 0, split < count
+    xe = np.array([x[0] - match * h, x[n - 1] + match * h])
+    # the start displacement at the arrived cells and the match points (lattice points of the same lattice)
+    m = count + int(has[0]) + int(has[1])
+    at = np.empty(m)
+    ri = np.empty(m, np.int64)
+    for c in range(count):
+        at[c] = x[cells[c]]
+        ri[c] = first + cells[c]
+    c = count
+    for s in range(2):
+        if has[s]:
+            at[c] = xe[s]
+            ri[c] = first - match if s == 0 else first + n - 1 + match
+            c += 1
+    ci = np.empty(q0.size, np.int64)
+    for j in range(q0.size):
+        ci[j] = first0 + j
+    start, done = _displaced(shift0, t, ri, ci, q0, datum0, bulk0, at, -(A / math.pi), ends0, one0, two0, near, tol)
+    glock = np.empty(count)
+    before = np.zeros(2)
+    side_of = np.full(n, -1, np.int64)
+    now = np.zeros((2, n))
+    phi = np.zeros((2, n))
+    K = np.zeros((2, n))
+    cx = np.zeros(2)
+    bef = np.zeros(2)
+    m1 = np.zeros(2)
+    fitted = 0
+    if not done:
+        return False, glock, start[:count], before, has, side_of, now, phi, K, cx, bef, m1, fitted
+    c = count
+    for s in range(2):
+        if has[s]:
+            before[s] = start[c]
+            c += 1
+    for s in range(2):
+        if not has[s]:
+            continue
+        side = -1 if s == 0 else 1
+        lo, hi = (0, split) if s == 0 else (split, count)
+        kk = hi - lo
+        pts = np.empty(kk + 1)  # outward from the edge: the arrived cells, then the match point
+        order = np.empty(kk, np.int64)  # the arrived index of each
+        for i in range(kk):
+            order[i] = hi - 1 - i if s == 0 else lo + i
+            pts[i] = at[order[i]]
+        pts[kk] = xe[s]
+        if s == 0:
+            parts = hermite_integrals(pts, edge_l, -1, A, *args_l, gauss_t, gauss_w)
+        else:
+            parts = hermite_integrals(pts, edge_r, 1, A, *args_r, gauss_t, gauss_w)
+        for i in range(kk):
+            a = order[i]
+            glock[a] = start[a] + side * (dQ * parts[i, 0] + dS * parts[i, 1])
+        if not fit:
+            continue
+        unit = side * (shape_q * parts[kk, 0] + shape_s * parts[kk, 1])
+        if not (unit != 0.0 and math.isfinite(unit)):
+            continue
+        for i in range(kk):
+            a = order[i]
+            cell = cells[a]
+            phi[fitted, cell] = side * (shape_q * parts[i, 0] + shape_s * parts[i, 1])
+            now[fitted, cell] = glock[a] - start[a]
+            side_of[cell] = fitted
+        # T' at the match point: the kernel from each cell, the end cells' shear over their supports
+        for i in range(n):
+            K[fitted, i] = t[match + i] if s == 0 else t[n - 1 + match - i]
+        point = xe[s:s + 1]
+        for e in range(ends1.size):
+            if e == 0:
+                pot, rest = _end_cell_kernel(point, *one1, near, tol)
+            else:
+                pot, rest = _end_cell_kernel(point, *two1, near, tol)
+            if rest.size:
+                return False, glock, start[:count], before, has, side_of, now, phi, K, cx, bef, m1, fitted
+            K[fitted, ends1[e]] += -(A / math.pi) * pot[0]
+        cx[fitted] = c1 * xe[s]
+        bef[fitted] = before[s]
+        m1[fitted] = unit
+        fitted += 1
+    return True, glock, start[:count], before, has, side_of, now, phi, K, cx, bef, m1, fitted
 
 
 @numba.njit(cache=True)
