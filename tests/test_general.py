@@ -1557,3 +1557,49 @@ def test_the_compiled_arrivals_are_the_python_route(kind, monkeypatch):
     for state, report in march(solver, path):
         assert report.converged
     assert compared["takes"] >= 10 and compared["fits"] >= 3, compared
+
+
+@pytest.mark.parametrize("kind", ["hertz", "punch"])
+def test_the_compiled_leaving_cells_are_the_python_route(kind, monkeypatch):
+    """The dissipation of the cells that leave the contact while slipping in one compiled pass
+    (_leaving_terms, since 0.4.4) against the Python route it replaced (written out here: the slipping old
+    cells outside the take, lam from the receding edges' travel, the end's displacement from
+    _displacement's general path, the slip with the shear only), and against its own fallback for points
+    inside an end cell's support (_displacement, then _leaving_slip): the same numbers to the last bit at
+    every fine take of a history whose contact recedes under P, M and sigma while it slips."""
+    problem = NormalProblem(PROFILES[kind], A)
+    solver = GeneralSolver(problem, F, 256)
+    leaving = general_module.GeneralSolver._leaving
+    seen = []
+
+    def checked(self, mem, N1, first, n, shift, x, q, h, sigma1):
+        got = leaving(self, mem, N1, first, n, shift, x, q, h, sigma1)
+        cell = mem.first + np.arange(mem.q.size)
+        out = ((cell < first) | (cell >= first + n)) & (mem.status != 0)
+        if not np.any(out):
+            assert got == 0.0
+            return got
+        xs, N0 = mem.x[out], mem.normal
+        lam = np.where(xs < N0.center,
+                       (xs - N0.left) / (N1.left - N0.left) if N1.left != N0.left else 1.0,
+                       (xs - N0.right) / (N1.right - N0.right) if N1.right != N0.right else 1.0)
+        lam = np.clip(lam, 0.0, 1.0)
+        g1 = self._displacement(shift, x, q, h, sigma1, xs, N1)
+        slip = lam * (g1 - mem.g[out])
+        slip = np.where(mem.status[out] * slip > 0.0, slip, 0.0)
+        terms = self.f * general_module.LEAVING_PRESSURE * mem.capacity[out] * np.abs(slip)
+        assert got == float(np.sum(terms)) * mem.spacing
+        fallback = general_module._leaving_slip(xs, np.flatnonzero(out), g1, mem.status, mem.g, mem.capacity,
+                                                N0.left, N0.right, N0.center, N1.left, N1.right,
+                                                self.f * general_module.LEAVING_PRESSURE)
+        assert np.array_equal(fallback, terms)
+        seen.append(got)
+        return got
+
+    monkeypatch.setattr(general_module.GeneralSolver, "_leaving", checked)
+    scale = P0 * (1e-4 if kind == "hertz" else 2e-4)  # moments of about a tenth of the contact's half-width
+    path = [(2.5 * P0, 0.5 * F * 2.5 * P0, 0.3 * scale, 2e7), (1.2 * P0, -0.6 * F * 1.2 * P0, -0.5 * scale, -3e7),
+            (0.6 * P0, 0.5 * F * 0.6 * P0, 0.4 * scale, 1e7)]
+    for state, report in march(solver, path):
+        assert report.converged
+    assert len(seen) >= 5 and sum(d > 0.0 for d in seen) >= 3, seen

@@ -957,21 +957,22 @@ class GeneralSolver(TangentialSolver):
         lo, hi = mem.first, mem.first + mem.q.size
         if lo >= first and hi <= first + n:  # every old cell is still in contact
             return 0.0
-        out = mem.status != 0
-        out[max(first - lo, 0):max(first + n - lo, 0)] = False  # those still in contact
-        if not np.any(out):
-            return 0.0
-        xs = mem.x[out]
+        # the old cells on the take's lattice (the memory a take starts from is its own lattice's)
+        ends = _end_supports(N1, first, n, h)
+        cells = [self._end_cell(N1, first, k, a, b, h) for k, a, b in ends]
+        lat = self._lattice(h, n)
         N0 = mem.normal
-        lam = np.where(xs < N0.center,
-                       (xs - N0.left) / (N1.left - N0.left) if N1.left != N0.left else 1.0,
-                       (xs - N0.right) / (N1.right - N0.right) if N1.right != N0.right else 1.0)
-        lam = np.clip(lam, 0.0, 1.0)
-        g1 = self._displacement(shift, x, q, h, sigma1, xs, N1)
-        slip = lam * (g1 - mem.g[out])
-        st = mem.status[out]
-        slip = np.where(st * slip > 0.0, slip, 0.0)
-        return float(np.sum(self.f * LEAVING_PRESSURE * mem.capacity[out] * np.abs(slip))) * mem.spacing
+        edges = (N0.left, N0.right, N0.center, N1.left, N1.right)
+        bound = self.f * LEAVING_PRESSURE
+        done, xs, at, terms = _leaving_terms(
+            mem.first, mem.status, mem.g, mem.capacity, first, n, h, *edges, bound,
+            lat._kernel_to(max(hi - first, first + n - lo)), shift, q, self._datum_factor(h, lat) * float(np.sum(q)),
+            0.25 * self.A * sigma1, self.A, np.array([k for k, _, _ in ends], np.int64), cells[0].kernel_arguments(),
+            cells[-1].kernel_arguments(), END_CELL_NEAR, LATTICE_POINT)
+        if not done:  # a point inside an end cell's support: the general displacement
+            g1 = self._displacement(shift, x, q, h, sigma1, xs, N1)
+            terms = _leaving_slip(xs, at, g1, mem.status, mem.g, mem.capacity, *edges, bound)
+        return float(np.sum(terms)) * mem.spacing
 
     def _shift(self, delta_int: float, total: float, h: float, lat: ToeplitzLattice) -> float:
         """The rigid shift in the package's datum of the lattice's internal one, ``total`` the sum of the
@@ -2020,6 +2021,60 @@ def _arrival_terms(x, known, first, h, A, centre, edge_l, edge_r, t, shift0, q0,
         fitted += 1
     return True, glock, start[:count], before, has, side_of, now, phi, K, cx, bef, m1, fitted
 
+
+@numba.njit(cache=True)
+def _leaving_terms(first0, status0, g0, cap0, first, n, h, left0, right0, centre0, left1, right1, bound, t, shift, q,
+                   datum, bulk, A, ends, one, two, near, tol):  # pragma: no cover - compiled
+    """GeneralSolver._leaving's terms in one pass: the cells of the old state (from lattice index ``first0``: its
+    status, locks and capacities) outside the take's n cells from ``first`` that slipped, their slip until
+    they left (:func:`_leaving_slip`) from the end's displacement there (:func:`_displaced` of the take's
+    shear ``q`` with its arguments, ``A`` the compliance). Returns done (False where a point met an end
+    cell's support: the caller finds the displacement by the general path), the cells' centres, their
+    indices in the old state and the terms (the caller sums them)."""
+    count = 0
+    for j in range(status0.size):
+        if status0[j] != 0 and not (first <= first0 + j < first + n):
+            count += 1
+    xs = np.empty(count)
+    ri = np.empty(count, np.int64)
+    at = np.empty(count, np.int64)
+    k = 0
+    for j in range(status0.size):
+        if status0[j] != 0 and not (first <= first0 + j < first + n):
+            xs[k] = (first0 + 0.5 + j) * h  # GeneralMemory.x's
+            ri[k] = first0 + j
+            at[k] = j
+            k += 1
+    if count == 0:
+        return True, xs, at, np.zeros(0)
+    ci = np.empty(n, np.int64)
+    for i in range(n):
+        ci[i] = first + i
+    g1, done = _displaced(shift, t, ri, ci, q, datum, bulk, xs, -(A / math.pi), ends, one, two, near, tol)
+    if not done:
+        return False, xs, at, np.zeros(0)
+    return True, xs, at, _leaving_slip(xs, at, g1, status0, g0, cap0, left0, right0, centre0, left1, right1, bound)
+
+
+@numba.njit(cache=True)
+def _leaving_slip(xs, at, g1, status0, g0, cap0, left0, right0, centre0, left1, right1, bound):  # pragma: no cover
+    """Each leaving cell's ``bound`` (f LEAVING_PRESSURE) times its capacity times |lam (g1 - g0)| (none where
+    that slip would oppose its shear): lam the fraction of the step at which the receding edge (from
+    ``left0`` / ``right0`` to ``left1`` / ``right1``) passed its centre ``xs``, g1 the end's displacement
+    there, ``at`` its index in the old state (GeneralSolver._leaving)."""
+    terms = np.empty(xs.size)
+    for k in range(xs.size):
+        x = xs[k]
+        if x < centre0:
+            lam = (x - left0) / (left1 - left0) if left1 != left0 else 1.0
+        else:
+            lam = (x - right0) / (right1 - right0) if right1 != right0 else 1.0
+        lam = min(max(lam, 0.0), 1.0)
+        slip = lam * (g1[k] - g0[at[k]])
+        if not status0[at[k]] * slip > 0.0:
+            slip = 0.0
+        terms[k] = bound * cap0[at[k]] * abs(slip)
+    return terms
 
 @numba.njit(cache=True)
 def _end_cell_rule(breaks, c, d, S, DS):  # pragma: no cover - compiled
