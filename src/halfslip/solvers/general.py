@@ -229,6 +229,9 @@ UNCONFIRMED_ISLAND = 4
 KINK_GRADING = 16
 #: Gauss-Legendre points per cell for the pressure integrals and the arrival integrals.
 CELL_GAUSS = 8
+#: Points from edge to edge at which _Load checks the rounding of the closed-form loads (the size of their
+#: terms varies smoothly along the contact).
+LOAD_SAMPLES = 17
 _GL_T, _GL_W = np.polynomial.legendre.leggauss(CELL_GAUSS)
 _GL_T, _GL_W = 0.5 * (_GL_T + 1.0), 0.5 * _GL_W
 #: Gauss-Legendre points on the intervals next to a kink of h' (x ln x in p).
@@ -1210,14 +1213,14 @@ class _Load:
         c, d = N.center, N.half_width
         self.k0 = math.ceil(N.left / h)
         # the lattice points inside the contact, the closed form there and the size of its terms, which varies
-        # smoothly along the contact: 17 samples find its largest
-        inner, loads, size = _closed_form_loads(np.linspace(N.left, N.right, 17), N.left, N.right, h, self.k0,
-                                                math.floor(N.right / h), *N.pressure_arguments())
+        # smoothly along the contact: LOAD_SAMPLES samples find its largest
+        inner, cum, size = _closed_form_loads(N.left, N.right, h, self.k0, math.floor(N.right / h), N.P,
+                                              *N.pressure_arguments())
         self.k0 = round(inner[0] / h) if inner.size else self.k0
         self.inner = inner.size
         self.closed_form = EPS * size <= LOAD_ROUNDING * N.P * h / (N.right - N.left)
         if self.closed_form:
-            self.cum = np.concatenate(([0.0], loads, [N.P]))
+            self.cum = cum
             return
         kinks = kinks[(kinks > N.left) & (kinks < N.right)]
         extra = [kinks]
@@ -1285,10 +1288,16 @@ def _lattice_indices(xs, xc, spacing, tol):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
-def _closed_form_loads(samples, left, right, h, k0, k1, x0, d, c0, c1, knots, jumps, piA):  # pragma: no cover
+def _closed_form_loads(left, right, h, k0, k1, P, x0, d, c0, c1, knots, jumps, piA):  # pragma: no cover - compiled
     """_Load's closed form in one call: the lattice points k h (k0 <= k <= k1) strictly inside the contact
-    [left, right], int p from its left edge to each (NormalSolution.load_to; ``x0`` .. ``piA`` the compiled
-    pressure's arguments) and the largest size of that sum's terms at ``samples``."""
+    [left, right], int p from its left edge to the left edge, each of them and the right edge (0, ..., P:
+    NormalSolution.load_to; ``x0`` .. ``piA`` the compiled pressure's arguments) and the largest size of
+    that sum's terms at LOAD_SAMPLES points from edge to edge (np.linspace's)."""
+    samples = np.empty(LOAD_SAMPLES)
+    step = (right - left) / (LOAD_SAMPLES - 1)
+    for i in range(LOAD_SAMPLES - 1):
+        samples[i] = i * step + left
+    samples[LOAD_SAMPLES - 1] = right
     count = 0
     for k in range(k0, k1 + 1):
         if left < h * k < right:
@@ -1306,9 +1315,12 @@ def _closed_form_loads(samples, left, right, h, k0, k1, x0, d, c0, c1, knots, ju
     for i in range(size.size):
         largest = max(largest, size[i] * scale)
     total, _ = _load_to_terms(inner, x0, d, c0, c1, knots, jumps, False)
+    cum = np.empty(total.size + 2)
+    cum[0] = 0.0
     for i in range(total.size):
-        total[i] *= scale
-    return inner, total, largest
+        cum[i + 1] = total[i] * scale
+    cum[total.size + 1] = P
+    return inner, cum, largest
 
 
 _NOTHING_CARRIED = (np.zeros(0, np.int8), np.zeros(0), np.zeros(0), np.zeros(0))
