@@ -1603,3 +1603,16 @@ def test_the_compiled_leaving_cells_are_the_python_route(kind, monkeypatch):
     for state, report in march(solver, path):
         assert report.converged
     assert len(seen) >= 5 and sum(d > 0.0 for d in seen) >= 3, seen
+
+
+def test_the_end_rules_polynomial_is_numpys_to_the_last_bit():
+    """The end rules' two-variable polynomial in the compiled edge placement (_polyval2d, since 0.4.4) is
+    numpy.polynomial.polynomial.polyval2d as it takes scalars - the same Horner steps - so the placements
+    did not move: equal to the last bit at the rules' own coefficients over their range (w_est in 0 .. 2,
+    u_e in -1 .. 1 cells) and beyond it, signs of zero included."""
+    rng = np.random.default_rng(3)
+    for rule in general_module._END_RULES.values():
+        for w, u in [(0.0, 0.0), (-0.0, 0.5), (1.0, -0.0)] + list(zip(rng.uniform(-1, 3, 200), rng.uniform(-2, 2, 200))):
+            got = general_module._polyval2d(float(w), float(u), rule)
+            want = float(np.polynomial.polynomial.polyval2d(w, u, rule))
+            assert got == want or (math.isnan(got) and math.isnan(want)), (w, u)

@@ -1594,21 +1594,35 @@ def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
     (since 0.3.7: J1 at 256 nodes with the contact edge anywhere in its cell, largest error 0.085 / 0.055
     of a cell against 0.20 before; the random Hertz histories at 1024 nodes 95th percentile 1.1e-4 ->
     7.3e-5 of the width, the punch's 2.1e-4 -> 1.9e-4)."""
-    out = []
+    left, right, placement = _run_edges_kernel(x, q, qmax, status, float(N.left), float(N.right), h, i, k,
+                                               bool(slipping[0]), bool(slipping[1]), drives is not None,
+                                               _NO_DRIVES if drives is None else np.array(drives, dtype=float),
+                                               _END_RULES[True], _END_RULES[False])
+    return left, right, placement
+
+
+@numba.njit(cache=True)
+def _run_edges_kernel(x, q, qmax, status, left, right, h, i, k, open_left, open_right, driven, drives,
+                      within_rule, end_rule):  # pragma: no cover - compiled
+    """_run_edges, compiled (since 0.4.4; the same operations): the contact's edges, (S1)'s ``open_left`` and
+    ``open_right`` and, where ``driven``, its ``drives`` ((2, 2): (u / f, v) at each edge); the end rules
+    END_RULE_WITHIN and END_RULE_END as arrays (benchmarks/calibrate_edge_rule.py sets them to zero)."""
+    out = np.empty(2)
     placement = 0.0
-    for side, (end, step, edge, open_) in enumerate(((i, 1, N.left, slipping[0]), (k, -1, N.right, slipping[1]))):
+    for side in range(2):
+        end, step, edge, open_ = (i, 1, left, open_left) if side == 0 else (k, -1, right, open_right)
         nb = end - step
         within = nb < 0 or nb >= x.size  # the run reaches the end cell
         if within:
             if not open_:
-                out.append(edge)
+                out[side] = edge
                 continue
-            if drives is not None:
+            if driven:
                 # the slip at the edge goes the way of the stuck increment's singular term there, u - chi f v
                 # with chi = q / (f p) at the edge (the end cell's): at an advancing edge that slips (abs(u) >=
                 # f v) the sign of u, at a receding one not necessarily that of q (unloading from a
                 # proportional state q = chi f p with dQ / dP above chi f slips backwards)
-                u, v = drives[side]
+                u, v = drives[side, 0], drives[side, 1]
                 sgn = 1 if u - (q[end] / qmax[end] if qmax[end] > 0.0 else 0.0) * v >= 0.0 else -1
             else:
                 sgn = 1 if q[end] >= 0.0 else -1
@@ -1633,8 +1647,8 @@ def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
             w = min(max(w, lower), u0)
             # and the lattice's response to that form (END_RULE_*), at most EDGE_INSIDE inward of the cell's centre
             w_est, u_e = w / h, u0 / h - (0.0 if within else 1.0)
-            w += h * float(np.polynomial.polynomial.polyval2d(w_est, u_e, _END_RULES[within]))
-            out.append(edge + step * min(max(w, lower), u0 + EDGE_INSIDE * h))
+            w += h * _polyval2d(w_est, u_e, within_rule if within else end_rule)
+            out[side] = edge + step * min(max(w, lower), u0 + EDGE_INSIDE * h)
             placement = max(placement, SUBCELL_PLACEMENT)
             continue
         # the traction margin f cap - |q| vanishes like the square root of the distance to the stick edge,
@@ -1658,17 +1672,35 @@ def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
             # centres, and their midpoint is at most half a cell from it
             frac = 0.5
             placement = max(placement, 0.5)
-        out.append(x[end] - step * frac * h)
+        out[side] = x[end] - step * frac * h
     return out[0], out[1], placement
+
+
+@numba.njit(cache=True)
+def _polyval2d(x, y, c):  # pragma: no cover - compiled
+    """sum c[i, j] x^i y^j as numpy.polynomial.polynomial.polyval2d takes it for scalars (Horner in x for
+    every power of y, then in y; the same operations)."""
+    v = np.empty(c.shape[1])
+    for j in range(c.shape[1]):
+        v[j] = c[c.shape[0] - 1, j] + x * 0.0
+    for i in range(c.shape[0] - 2, -1, -1):
+        for j in range(c.shape[1]):
+            v[j] = c[i, j] + v[j] * x
+    out = v[v.size - 1] + y * 0.0
+    for j in range(v.size - 2, -1, -1):
+        out = v[j] + out * y
+    return out
 
 
 #: How far inside its outermost stick cell's centre a stick edge may lie, in cells: where EDGE_RULE puts it
 #: when that cell is about to slip (rho = 0).
 EDGE_INSIDE = -EDGE_RULE[-1]
 _END_RULES = {True: np.array(END_RULE_WITHIN), False: np.array(END_RULE_END)}
+_NO_DRIVES = np.zeros((2, 2))
 
 
-def _edge_rule(rho: float) -> float:
+@numba.njit(cache=True)
+def _edge_rule(rho):  # pragma: no cover - compiled
     """Where a stick edge lies outward of its outermost stick cell's centre, in cells (EDGE_RULE)."""
     u = 0.0
     for c in EDGE_RULE:
