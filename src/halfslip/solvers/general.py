@@ -680,9 +680,8 @@ class GeneralSolver(TangentialSolver):
                 g0, before, terms = terms
             else:
                 glock[~known], g0, before = self._arrivals(mem, loads0, loads1, N1, path, x, known, h)
-        sigma_term = 0.25 * A * loads1.sigma * x
-        r = glock - sigma_term  # stick: (T q)_i - delta = -r_i
-        qmax = f * cap
+        # the bulk term, r (stick: (T q)_i - delta = -r_i), the bounds, and r's mid-range and largest size
+        sigma_term, r, qmax, r0, qmax_max, r_max = _take_inputs(glock, x, 0.25 * A * loads1.sigma, f, cap)
         gross = abs(loads1.Q) >= f * loads1.P
         if gross:
             sgn = 1 if loads1.Q > 0.0 else -1
@@ -699,16 +698,16 @@ class GeneralSolver(TangentialSolver):
         else:
             # a constant in r only shifts delta: take the common offset out (the locked displacements
             # carry the history's rigid slide, which may dwarf what the step changes)
-            r0 = 0.5 * (float(np.min(r)) + float(np.max(r)))
-            gscale = A * float(qmax.max()) * h
-            floor = ROUNDING * float(np.max(np.abs(r)))
+            gscale = A * qmax_max * h
+            floor = ROUNDING * r_max
+            tolerances = _decision_tolerances(qmax_max, gscale, floor)
             fit = None
             if terms is not None:  # _arrived's, less r0
                 fit = terms(r0)
             elif self.arrivals and old and g0 is not None and path is not None:
                 fit = self._arrival_fit(mem, lat, h, loads1, path, x, known, g0, before, glock, r0)
             q, delta_int, status, Tq, iterations, restarts, sizes = self._active_set(
-                lat, n, r - r0, qmax, loads1.Q / h, start, gscale, floor, fit)
+                lat, n, r - r0, qmax, loads1.Q / h, start, *tolerances, fit)
             delta_int += r0
             message = ""
             if sizes is not None:
@@ -762,7 +761,7 @@ class GeneralSolver(TangentialSolver):
             # cells beside the edges that are as much stuck as slipping (at the bound, not slipping)
             placement = max(placement, _undecided_reach(x, q, qmax, s, status, N1, h, runs[0][0], runs[-1][1] - 1,
                                                         slipping, drives, edges,
-                                                        *_decision_tolerances(qmax, gscale, floor)))
+                                                        *tolerances))
             a, b = max(runs, key=lambda r: r[1] - r[0])
             if len(runs) == 1:
                 widest = edges
@@ -773,7 +772,7 @@ class GeneralSolver(TangentialSolver):
                         message, slipping, placement)
 
     def _active_set(self, lat: "_EndCellLattice", n: int, r: np.ndarray, qmax: np.ndarray, total: float,
-                    status: np.ndarray, gscale: float, floor: float = 0.0, fit=None):
+                    status: np.ndarray, qtol: float, stol: float, fit=None):
         """Primal-dual active set for min 1/2 q^T T' q + q^T r, |q| <= qmax, sum q = total (compiled:
         _toeplitz.active_set), restarted from the projected gradient's pattern when a pattern repeats;
         with ``fit`` (:meth:`_arrival_fit`), the arrivals' sizes found in the same iterations.
@@ -783,7 +782,6 @@ class GeneralSolver(TangentialSolver):
         (None: none fitted).
         """
         m, spec = lat.lat._circulant(n)
-        qtol, stol = _decision_tolerances(qmax, gscale, floor)
         r = np.ascontiguousarray(r, dtype=float)
         side_of, now, phi, K, e, m1 = fit if fit is not None else _no_fit(n)
         iterations = restarts = 0
@@ -1458,11 +1456,29 @@ def _coarsened(fine: GeneralMemory):
     return first, fine.status[idx].copy()
 
 
-def _decision_tolerances(qmax, gscale, floor) -> tuple[float, float]:
+def _decision_tolerances(qmax_max: float, gscale: float, floor: float) -> tuple[float, float]:
     """(shear, slip): how far past its bound a stuck cell's shear, and against its direction a slipping cell's
-    increment, may go before the active set changes the cell (FLIP_TOL of f max p and of A f max p h, the
-    slip never below ``floor``, the rounding of the locked displacements)."""
-    return FLIP_TOL * float(qmax.max()), max(FLIP_TOL * gscale, floor)
+    increment, may go before the active set changes the cell (FLIP_TOL of f max p, ``qmax_max``, and of A f
+    max p h, the slip never below ``floor``, the rounding of the locked displacements)."""
+    return FLIP_TOL * qmax_max, max(FLIP_TOL * gscale, floor)
+
+
+@numba.njit(cache=True)
+def _take_inputs(glock, x, c1, f, cap):  # pragma: no cover - compiled
+    """A take's bulk term c1 x (c1 = A sigma1 / 4), r = glock - c1 x, the bounds f cap, and r's mid-range,
+    the largest bound and r's largest size, in one pass (the numbers of numpy's array steps)."""
+    n = x.size
+    sigma_term = np.empty(n)
+    r = np.empty(n)
+    qmax = np.empty(n)
+    lo, hi, size, top = np.inf, -np.inf, 0.0, -np.inf
+    for i in range(n):
+        sigma_term[i] = c1 * x[i]
+        r[i] = glock[i] - sigma_term[i]
+        qmax[i] = f * cap[i]
+        lo, hi = min(lo, r[i]), max(hi, r[i])
+        size, top = max(size, abs(r[i])), max(top, qmax[i])
+    return sigma_term, r, qmax, 0.5 * (lo + hi), top, size
 
 
 def _match_points(x: np.ndarray, h: float) -> dict:
