@@ -519,6 +519,36 @@ def test_end_cell_columns_are_the_pressure_shaped_force(kind, load):
         assert abs(got - (-(A_STEEL / math.pi) * (shaped - cell))) <= (1e-11 if load == 1.0 else 1e-8) * t0
 
 
+@pytest.mark.parametrize("kind", ["hertz", "punch"])
+def test_two_new_end_cells_in_one_call_are_the_cell_by_cell_route(kind):
+    """A take's two new end cells set up and evaluated at its cells in one compiled call (general._end_pair,
+    since 0.4.4) give the numbers of each _EndCell set up and evaluated on its own, to the last bit: its
+    rule, weights, moments and own-centre value, and its columns at the cells and at points inside either
+    support other than its centre (where the rule is cut at the point, _EndCell._inside)."""
+    import halfslip.solvers.general as G
+    from halfslip.geometry import NormalProblem
+
+    from helpers import A as A_STEEL
+    from helpers import PROFILES
+
+    problem = NormalProblem(PROFILES[kind], A_STEEL)
+    N = problem.solve(P0, 0.0)
+    h = (N.right - N.left) / 64 * 1.013
+    first, n = G._cells(N.left, N.right, h)
+    x = (first + 0.5 + np.arange(n)) * h
+    ends = G._end_supports(N, first, n, h)
+    inside = [0.5 * (ends[0][1] + x[0]), 0.5 * (ends[1][2] + x[-1])]
+    xs = np.concatenate([x, inside])
+    solver = G.GeneralSolver(problem, 0.6, 64)
+    fused = solver._end_columns(N, first, h, ends, xs)
+    for c, (k, a, b) in enumerate(ends):
+        kept = solver._end_cells.get((a, b, first + k, h), (N,))
+        alone = G._EndCell(N, a, b, (first + k) * h, h, solver._kinks)
+        for name in ("xi", "w", "series"):
+            assert np.array_equal(getattr(kept, name), getattr(alone, name)), name
+        assert kept.scale == alone.scale and kept.own == alone.own
+        assert np.array_equal(fused[:, c], -(A_STEEL / math.pi) * alone.potential(xs))
+
 def test_end_cell_lattice_solves_and_products_are_the_dense_ones():
     """_EndCellLattice: T' = T + the two correction columns; its products and its stick-set solves (Woodbury
     where an end cell sticks, with and without the column of ones, over the routes of solve_runs) against

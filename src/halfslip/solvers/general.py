@@ -1027,7 +1027,22 @@ class GeneralSolver(TangentialSolver):
         """(T' - T) at the points ``xs`` for the end cells ``ends`` [(k, a, b)] of a state whose cells start
         at lattice index ``first``: minus the displacement of a unit shear (force h) spread like the
         pressure of ``normal`` over [a, b], less that of the same force spread over the cell (:class:`_EndCell`,
-        kept for the recent states). Shape (xs.size, len(ends)); the datum cancels."""
+        kept for the recent states). Shape (xs.size, len(ends)); the datum cancels. Two new end cells
+        (a take's, at a new contact) are set up and evaluated in one compiled call (:func:`_end_pair`)."""
+        if len(ends) == 2 and all(self._end_cells.get((a, b, first + k, h), (normal,)) is None for k, a, b in ends):
+            cells = [_EndCell(normal, a, b, (first + k) * h, h, self._kinks, build=False) for k, a, b in ends]
+            one, two = cells
+            parts, out, rests = _end_pair(one.cuts, one.x0, one.inside, one.lo, one.a, one.b, two.cuts, two.x0,
+                                          two.inside, two.lo, two.a, two.b, normal.center, normal.half_width, _EC_S,
+                                          _EC_DS, normal.pressure_arguments(), h, END_CELL_TERMS,
+                                          np.ascontiguousarray(xs, dtype=float), END_CELL_NEAR, LATTICE_POINT,
+                                          -(self.A / math.pi))
+            for c, ((k, a, b), cell) in enumerate(zip(ends, cells)):
+                cell.built(parts[c])
+                self._end_cells.put((a, b, first + k, h), (normal,), cell)
+                if rests[c].size:  # points inside its support other than its centre
+                    out[rests[c], c] = -(self.A / math.pi) * cell._inside(xs[rests[c]])
+            return out
         out = np.empty((xs.size, len(ends)))
         for c, (k, a, b) in enumerate(ends):
             out[:, c] = -(self.A / math.pi) * self._end_cell(normal, first, k, a, b, h).potential(xs)
@@ -1898,19 +1913,23 @@ class _EndCell:
     on the random histories at 1024 nodes; with the pressure since 0.4.3.
     """
 
-    def __init__(self, normal, a: float, b: float, lo: float, h: float, kinks: np.ndarray):
+    def __init__(self, normal, a: float, b: float, lo: float, h: float, kinks: np.ndarray, build: bool = True):
         self.normal, self.a, self.b, self.lo, self.h = normal, a, b, lo, h
         self.x0 = lo + 0.5 * h
         # the pieces: cut at the kinks and at the cell's centre (inside the support: it is in the contact)
-        self.cuts = [a] + [float(k) for k in kinks if a < k < b] + [b]
-        own = a < self.x0 < b
-        # the rule's points; the weights of the force h, the moments of the pressure-shaped force less those of
-        # the uniform one (odd ones of the cell vanish), in cells (the k-th moment over h^(k + 1)), and the
-        # shaped potential at the cell's own centre, from the same points (the rule is cut there)
-        self.xi, self.w, self.scale, self.series, at_own = _end_cell_build(
-            np.array(self.cuts), self.x0, own, normal.center, normal.half_width, _EC_S, _EC_DS,
-            normal.pressure_arguments(), h, a, b, END_CELL_TERMS)
-        self.own = at_own if own else None
+        self.cuts = np.array([a] + [float(k) for k in kinks if a < k < b] + [b])
+        self.inside = a < self.x0 < b
+        if build:  # (or :func:`_end_pair` with another, then :meth:`built`)
+            self.built(_end_cell_build(self.cuts, self.x0, self.inside, normal.center, normal.half_width, _EC_S,
+                                       _EC_DS, normal.pressure_arguments(), h, a, b, END_CELL_TERMS))
+
+    def built(self, parts: tuple) -> None:
+        """Take :func:`_end_cell_build`'s answer: the rule's points; the weights of the force h, the moments of
+        the pressure-shaped force less those of the uniform one (odd ones of the cell vanish), in cells (the
+        k-th moment over h^(k + 1)), and the shaped potential at the cell's own centre, from the same points
+        (the rule is cut there)."""
+        self.xi, self.w, self.scale, self.series, at_own = parts
+        self.own = at_own if self.inside else None
 
     def kernel_arguments(self) -> tuple:
         """:func:`_end_cell_kernel`'s arguments between the points and ``near``."""
@@ -1929,7 +1948,7 @@ class _EndCell:
         """The potentials at points inside the support other than the cell's centre (rare: the lattice's
         points inside an end cell's support are its own centre): the rule cut at each of them."""
         part = np.empty(xn.size)
-        cuts, N = np.array(self.cuts), self.normal
+        cuts, N = self.cuts, self.normal
         for i, x in enumerate(xn.tolist()):
             xj, pj, dj = _cut_rule(cuts, x, True, N.center, N.half_width, _EC_S, _EC_DS, N.pressure_arguments())
             part[i] = _shaped_at(x, xj, pj, dj, self.scale, self.a, self.b)
@@ -2135,6 +2154,27 @@ def _leaving_slip(xs, at, g1, status0, g0, cap0, left0, right0, centre0, left1, 
             slip = 0.0
         terms[k] = bound * cap0[at[k]] * abs(slip)
     return terms
+
+@numba.njit(cache=True)
+def _end_pair(cuts0, x00, inside0, lo0, a0, b0, cuts1, x01, inside1, lo1, a1, b1, c, d, S, DS, pressure, h, terms,
+              xs, near, tol, scale):  # pragma: no cover - compiled
+    """Two end cells of a contact (centre c, half-width d, its pressure's arguments) set up (:func:`_end_cell_build`
+    each: their cuts, centres, whether the centre lies inside the support, supports [a, b] and cells from lo)
+    and their columns at ``xs``: ``scale`` (-A / pi) times each one's potential (:func:`_end_cell_kernel`).
+    Returns both set-ups, the columns (xs.size, 2) and, per cell, the points inside its support other than
+    its centre (their column is not set: GeneralSolver._end_columns)."""
+    one = _end_cell_build(cuts0, x00, inside0, c, d, S, DS, pressure, h, a0, b0, terms)
+    two = _end_cell_build(cuts1, x01, inside1, c, d, S, DS, pressure, h, a1, b1, terms)
+    out = np.empty((xs.size, 2))
+    pot, rest0 = _end_cell_kernel(xs, x00, h, lo0, a0, b0, one[3], one[0], one[1], one[4] if inside0 else math.nan,
+                                  near, tol)
+    for i in range(xs.size):
+        out[i, 0] = scale * pot[i]
+    pot, rest1 = _end_cell_kernel(xs, x01, h, lo1, a1, b1, two[3], two[0], two[1], two[4] if inside1 else math.nan,
+                                  near, tol)
+    for i in range(xs.size):
+        out[i, 1] = scale * pot[i]
+    return (one, two), out, (rest0, rest1)
 
 @numba.njit(cache=True)
 def _end_cell_rule(breaks, c, d, S, DS):  # pragma: no cover - compiled
