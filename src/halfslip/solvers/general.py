@@ -673,11 +673,11 @@ class GeneralSolver(TangentialSolver):
         status, glock, G, cap0, known, start, arrived = _carried(
             first, n, mem.first, *((mem.status, mem.g, mem.G, mem.capacity) if old else _NOTHING_CARRIED),
             *(hint if hint is not None else (0, _NO_HINT)))
-        g0 = before = terms = None
+        g0 = before = fit_of = None
         if arrived:
-            terms = self._arrived(mem, N1, path, x, known, h, first, lat, glock) if old else None
-            if terms is not None:
-                g0, before, terms = terms
+            found = self._arrived(mem, N1, path, x, known, h, first, lat, glock) if old else None
+            if found is not None:
+                g0, before, fit_of = found
             else:
                 glock[~known], g0, before = self._arrivals(mem, loads0, loads1, N1, path, x, known, h)
         # the bulk term, r (stick: (T q)_i - delta = -r_i), the bounds, and r's mid-range and largest size
@@ -702,8 +702,8 @@ class GeneralSolver(TangentialSolver):
             floor = ROUNDING * r_max
             tolerances = _decision_tolerances(qmax_max, gscale, floor)
             fit = None
-            if terms is not None:  # _arrived's, less r0
-                fit = terms(r0)
+            if fit_of is not None:  # _arrived's, given r0
+                fit = fit_of(r0)
             elif self.arrivals and old and g0 is not None and path is not None:
                 fit = self._arrival_fit(mem, lat, h, loads1, path, x, known, g0, before, glock, r0)
             q, delta_int, status, Tq, iterations, restarts, sizes = self._active_set(
@@ -1968,10 +1968,7 @@ def _displaced(shift, t, ri, ci, q, datum, bulk, xs, scale, ends, one, two, near
         out[i] = (shift - (out[i] + datum)) + bulk * xs[i]
     corr = np.zeros(n)  # the end cells' columns times their shear, summed over the cells
     for c in range(ends.size):
-        if c == 0:
-            pot, rest = _end_cell_kernel(xs, *one, near, tol)
-        else:
-            pot, rest = _end_cell_kernel(xs, *two, near, tol)
+        pot, rest = _end_potential(xs, c, one, two, near, tol)
         if rest.size:
             return out, False
         qc = q[ends[c]]
@@ -2087,10 +2084,7 @@ def _arrival_terms(x, known, first, h, A, centre, edge_l, edge_r, t, shift0, q0,
             K[fitted, i] = t[match + i] if s == 0 else t[n - 1 + match - i]
         point = xe[s:s + 1]
         for e in range(ends1.size):
-            if e == 0:
-                pot, rest = _end_cell_kernel(point, *one1, near, tol)
-            else:
-                pot, rest = _end_cell_kernel(point, *two1, near, tol)
+            pot, rest = _end_potential(point, e, one1, two1, near, tol)
             if rest.size:
                 return False, glock, start[:count], before, has, side_of, now, phi, K, cx, bef, m1, fitted
             K[fitted, ends1[e]] += -(A / math.pi) * pot[0]
@@ -2175,6 +2169,15 @@ def _end_pair(cuts0, x00, inside0, lo0, a0, b0, cuts1, x01, inside1, lo1, a1, b1
     for i in range(xs.size):
         out[i, 1] = scale * pot[i]
     return (one, two), out, (rest0, rest1)
+
+@numba.njit(cache=True)
+def _end_potential(xs, e, one, two, near, tol):  # pragma: no cover - compiled
+    """:func:`_end_cell_kernel` of a state's end cell e (0: the first, ``one``; else the last, ``two``: their
+    :meth:`_EndCell.kernel_arguments`) at ``xs``."""
+    if e == 0:
+        return _end_cell_kernel(xs, *one, near, tol)
+    return _end_cell_kernel(xs, *two, near, tol)
+
 
 @numba.njit(cache=True)
 def _end_cell_rule(breaks, c, d, S, DS):  # pragma: no cover - compiled
