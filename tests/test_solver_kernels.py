@@ -610,3 +610,19 @@ def test_the_compiled_small_solves_and_transform_lengths():
     assert _rel(tz._lu_solve(C, y), np.linalg.solve(C, y)) <= 1e-14
     for n in list(range(1, 300)) + [1023, 2049, 4097, 12289, 30001]:
         assert tz.fast_len(n) == sfft.next_fast_len(n, real=True), n
+
+
+def test_the_compiled_pairwise_sum_is_numpys_to_the_last_bit():
+    """_geometry_kernels.pairwise_sum (since 0.4.4: the sums a take's compiled end returns, sum q and the
+    slipping cells' dissipation) is numpy.sum of a contiguous float64 array to the last bit: the same
+    pairwise blocks, accumulators and splits. Every length up to 300 (the block edges at 8 and 128 and
+    their multiples), and longer ones through several splits, values over ten decades of both signs, a
+    slice from an offset, and zeros of either sign."""
+    from halfslip._geometry_kernels import pairwise_sum
+
+    rng = np.random.default_rng(5)
+    for n in list(range(301)) + [511, 512, 513, 1000, 1024, 2047, 4097]:
+        a = rng.standard_normal(n + 3) * 10.0 ** rng.uniform(-5, 5, n + 3)
+        assert pairwise_sum(a, 3, n) == float(np.sum(a[3:])), n
+    for a in (np.array([-0.0]), np.array([-0.0, -0.0]), np.zeros(0)):
+        assert math.copysign(1.0, pairwise_sum(a, 0, a.size)) == math.copysign(1.0, float(np.sum(a)))

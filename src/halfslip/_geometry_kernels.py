@@ -10,6 +10,41 @@ import numba
 import numpy as np
 
 
+@numba.njit(cache=True)
+def pairwise_sum(a, lo, n):  # pragma: no cover - compiled
+    """numpy.sum of the n contiguous float64 values of ``a`` from ``lo``, to the last bit: numpy's pairwise
+    summation (blocks of at most 128 in eight accumulators, split in halves at multiples of eight above
+    that, fewer than eight summed in order from 0.0), for compiled code whose sums must stay numpy's."""
+    if n < 8:
+        res = 0.0
+        for i in range(lo, lo + n):
+            res += a[i]
+        return res
+    if n <= 128:
+        r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
+        r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
+        i = 8
+        while i < n - (n % 8):
+            j = lo + i
+            r0 += a[j]
+            r1 += a[j + 1]
+            r2 += a[j + 2]
+            r3 += a[j + 3]
+            r4 += a[j + 4]
+            r5 += a[j + 5]
+            r6 += a[j + 6]
+            r7 += a[j + 7]
+            i += 8
+        res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+        while i < n:
+            res += a[lo + i]
+            i += 1
+        return res
+    half = n // 2
+    half -= half % 8
+    return pairwise_sum(a, lo, half) + pairwise_sum(a, lo + half, n - half)
+
+
 @numba.njit(cache=True, error_model="numpy")
 def _log_term(x, knot, left, right, d):  # pragma: no cover - compiled
     """L = ln| (1 - s t + sqrt(1 - s^2) sqrt(1 - t^2)) / (t - s) |, s and t the normalised x and knot.

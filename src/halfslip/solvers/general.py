@@ -60,7 +60,7 @@ import numba
 import numpy as np
 
 from .. import limits
-from .._geometry_kernels import _load_to_terms, _pressure_at
+from .._geometry_kernels import _load_to_terms, _pressure_at, pairwise_sum
 from ..geometry import NormalProblem, NormalSolution
 from ..state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime, StepReport
 from ..state import frozen as _frozen
@@ -718,22 +718,18 @@ class GeneralSolver(TangentialSolver):
                     glock += size * shape[j] - now[j]
         self.counters["iterations"] += iterations
         self.counters["restarts"] += restarts
-        g, s, parts, coulomb, direction, stuck, locked = _settled(delta_int, Tq, sigma_term, glock, status, q, qmax,
-                                                                  cap0, cap, f)
-        slipped = parts.size  # the slipping cells
-        total = float(np.sum(q))
+        g, s, G, runs, slipped, total, spent, cap_max, coulomb, direction, stuck, locked = _settled(
+            delta_int, Tq, sigma_term, glock, status, q, qmax, cap0, cap, f, G)
         if gross:
             residual = 0.0
         else:
-            cap_max = float(cap.max())
             residual = _verdict(coulomb, direction, stuck, h * total, loads1.Q, f * loads1.P, f * cap_max,
                                 A * f * cap_max * h, ROUNDING * locked)
-        dissipation = float(np.sum(parts)) * h
+        dissipation = spent * h
         shift = self._shift(delta_int, total, h, lat)
         if old and not shadow:
             # cells that leave the contact during the step while slipping dissipate until they leave
             dissipation += self._leaving(mem, N1, first, n, shift, x, q, h, loads1.sigma)
-        G = G + s
         memory = GeneralMemory(N1, h, first, _frozen(status), _frozen(q), _frozen(g), _frozen(G), _frozen(cap),
                                shift)
         drives = _edge_drives(N1, loads0, loads1) if mem.normal is not None else None
@@ -753,7 +749,7 @@ class GeneralSolver(TangentialSolver):
             regime, edges = Regime.GROSS_SLIDING, (math.nan, math.nan)
             widest = edges
         else:
-            runs = _runs(status == 0)
+            runs = list(map(tuple, runs.tolist()))
             regime = Regime.PARTIAL_SLIP
             *edges, placement = _run_edges(x, q, qmax, status, N1, h, runs[0][0], runs[-1][1] - 1, slipping,
                                           drives)
@@ -1559,12 +1555,13 @@ def _verdict(coulomb, direction, stuck, force, Q, fP, qscale, gscale, floor=0.0)
 
 
 @numba.njit(cache=True)
-def _settled(delta, Tq, sigma_term, glock, status, q, qmax, cap0, cap, f):  # pragma: no cover - compiled
+def _settled(delta, Tq, sigma_term, glock, status, q, qmax, cap0, cap, f, G0):  # pragma: no cover - compiled
     """A take's end from its active set's answer: g (the locked displacement where a cell sticks, the relative
-    displacement delta - T' q + A sigma x / 4 where it slips), the slip s = g - the lock (0 where stuck), each
-    slipping cell's dissipation f (cap0 + cap) / 2 |s| (in order; the caller sums and scales them), and what
-    :func:`_verdict` checks: the largest Coulomb excess abs(q) - qmax (at least 0), slip against the shear and
-    slip where stuck, and max abs(lock)."""
+    displacement delta - T' q + A sigma x / 4 where it slips), the slip s = g - the lock (0 where stuck), the
+    accumulated slip G0 + s, the runs of stuck cells (half-open, (k, 2)), how many cells slip, sum q and the sum of
+    each slipping cell's dissipation f (cap0 + cap) / 2 |s| (numpy's sums: pairwise_sum; the caller scales
+    it), max cap, and what :func:`_verdict` checks: the largest Coulomb excess abs(q) - qmax (at least 0),
+    slip against the shear and slip where stuck, and max abs(lock)."""
     n = q.size
     g = np.empty(n)
     s = np.empty(n)
@@ -1586,7 +1583,13 @@ def _settled(delta, Tq, sigma_term, glock, status, q, qmax, cap0, cap, f):  # pr
             s[i] = si
             parts[count] = f * 0.5 * (cap0[i] + cap[i]) * abs(si)
             count += 1
-    return g, s, parts[:count], coulomb, direction, stuck, locked
+    G = np.empty(n)
+    top = -np.inf
+    for i in range(n):
+        G[i] = G0[i] + s[i]
+        top = max(top, cap[i])
+    return (g, s, G, _run_bounds(status == 0), count, pairwise_sum(q, 0, n), pairwise_sum(parts, 0, count), top,
+            coulomb, direction, stuck, locked)
 
 
 def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
