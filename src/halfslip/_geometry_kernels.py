@@ -13,36 +13,65 @@ import numpy as np
 @numba.njit(cache=True)
 def pairwise_sum(a, lo, n):  # pragma: no cover - compiled
     """numpy.sum of the n contiguous float64 values of ``a`` from ``lo``, to the last bit: numpy's pairwise
-    summation (blocks of at most 128 in eight accumulators, split in halves at multiples of eight above
-    that, fewer than eight summed in order from 0.0), for compiled code whose sums must stay numpy's."""
+    summation (blocks of at most 128 in eight accumulators, :func:`_pairwise_block`, split in halves at
+    multiples of eight above that and added back up the same tree), for compiled code whose sums must stay
+    numpy's. Without recursion (numba cannot load a recursive function called from another one from its
+    cache), the halves on a stack."""
+    if n <= 128:
+        return _pairwise_block(a, lo, n)
+    todo = np.empty((192, 3), np.int64)  # (start, count, 0: to split or sum / 1: to add up), depth <= 64
+    done = np.empty(64)
+    top = 0
+    count = 0
+    todo[0, 0], todo[0, 1], todo[0, 2] = lo, n, 0
+    top = 1
+    while top > 0:
+        top -= 1
+        start, m, add = todo[top, 0], todo[top, 1], todo[top, 2]
+        if add:
+            count -= 1
+            done[count - 1] = done[count - 1] + done[count]
+        elif m <= 128:
+            done[count] = _pairwise_block(a, start, m)
+            count += 1
+        else:
+            half = m // 2
+            half -= half % 8
+            todo[top, 0], todo[top, 1], todo[top, 2] = start, m, 1  # then the two halves' sums are added
+            todo[top + 1, 0], todo[top + 1, 1], todo[top + 1, 2] = start + half, m - half, 0
+            todo[top + 2, 0], todo[top + 2, 1], todo[top + 2, 2] = start, half, 0  # the first half first
+            top += 3
+    return done[0]
+
+
+@numba.njit(cache=True)
+def _pairwise_block(a, lo, n):  # pragma: no cover - compiled
+    """numpy's pairwise sum of at most 128 values: fewer than eight in order from 0.0, else eight
+    accumulators over the multiples of eight, combined in pairs, and the rest in order."""
     if n < 8:
         res = 0.0
         for i in range(lo, lo + n):
             res += a[i]
         return res
-    if n <= 128:
-        r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
-        r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
-        i = 8
-        while i < n - (n % 8):
-            j = lo + i
-            r0 += a[j]
-            r1 += a[j + 1]
-            r2 += a[j + 2]
-            r3 += a[j + 3]
-            r4 += a[j + 4]
-            r5 += a[j + 5]
-            r6 += a[j + 6]
-            r7 += a[j + 7]
-            i += 8
-        res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-        while i < n:
-            res += a[lo + i]
-            i += 1
-        return res
-    half = n // 2
-    half -= half % 8
-    return pairwise_sum(a, lo, half) + pairwise_sum(a, lo + half, n - half)
+    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
+    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
+    i = 8
+    while i < n - (n % 8):
+        j = lo + i
+        r0 += a[j]
+        r1 += a[j + 1]
+        r2 += a[j + 2]
+        r3 += a[j + 3]
+        r4 += a[j + 4]
+        r5 += a[j + 5]
+        r6 += a[j + 6]
+        r7 += a[j + 7]
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        res += a[lo + i]
+        i += 1
+    return res
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -296,9 +325,10 @@ def _contact_pieces(x0, d, breaks, lower, upper, coeffs, origins):  # pragma: no
 def _contact_solution(x0, d, breaks, lower, upper, coeffs, origins, slope_moments,
                       curvature_moments):  # pragma: no cover - compiled
     """What NormalProblem._solution needs of the one contact [x0 - d, x0 + d] in one call (the same operations
-    as _piece_integrals, _moments_from and _ContactPressure.from_integrals): the slope moment I_0, the terms
-    of the pressure's smooth coefficients over the pieces met (c0 = d sum terms0, c1 = d^2 sum terms1; the
-    caller sums them as numpy does) and the range [klo, khi) of the breaks strictly inside the contact."""
+    as _piece_integrals, _moments_from and _ContactPressure.from_integrals): the slope moment I_0, the sums
+    of the terms of the pressure's smooth coefficients over the pieces met (c0 = d sum terms0, c1 = d^2 sum
+    terms1; summed as numpy does, :func:`pairwise_sum`) and the range [klo, khi) of the breaks strictly
+    inside the contact."""
     D, value, curvature, c2, first, last = _contact_pieces(x0, d, breaks, lower, upper, coeffs, origins)
     slope, _, _ = _moments_kernel(D, value, curvature, c2, np.full(1, d), slope_moments, curvature_moments)
     J = value.shape[1]
@@ -307,7 +337,7 @@ def _contact_solution(x0, d, breaks, lower, upper, coeffs, origins, slope_moment
     for j in range(J):
         terms0[j] = curvature[0, j] * D[0, j, 0] + c2[0, j] * d * D[0, j, 1]
         terms1[j] = c2[0, j] * D[0, j, 0]
-    return slope[0, 0], terms0, terms1, first, last - 1
+    return slope[0, 0], pairwise_sum(terms0, 0, J), pairwise_sum(terms1, 0, J), first, last - 1
 
 
 _EPS = float(np.finfo(np.float64).eps)

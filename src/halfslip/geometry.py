@@ -1252,11 +1252,11 @@ class NormalProblem:
 
         center, half_width = float(center), float(half_width)
         pieces = self._pieces
-        slope, terms0, terms1, klo, khi = _contact_solution(center, half_width, pieces.breaks, pieces.lower,
-                                                            pieces.upper, pieces.coeffs, pieces.origins,
-                                                            _SLOPE_MOMENTS, _CURVATURE_MOMENTS)
+        slope, sum0, sum1, klo, khi = _contact_solution(center, half_width, pieces.breaks, pieces.lower,
+                                                        pieces.upper, pieces.coeffs, pieces.origins,
+                                                        _SLOPE_MOMENTS, _CURVATURE_MOMENTS)
         d = half_width
-        smooth = (d * float(np.sum(terms0)), d * d * float(np.sum(terms1)))
+        smooth = (d * sum0, d * d * sum1)
         return NormalSolution(
             P=P,
             M=M,

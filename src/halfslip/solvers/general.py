@@ -53,6 +53,7 @@ edge error (the edges converge at first order in h).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass
 
@@ -68,6 +69,13 @@ from ._general_path import EdgePath, arrival_strain_parts, hermite_integrals
 from . import _toeplitz
 from ._toeplitz import ToeplitzLattice, _end_matvec, _G, _run_array, _run_bounds, kernel, stick_solve, table_products
 from .base import BACKWARD_SLIP, FORWARD_SLIP, OUT_OF_CONTACT, STICK, TangentialSolver
+
+# Compiled functions here call compiled functions of other files: _load_to_terms, _pressure_at and
+# pairwise_sum (_geometry_kernels), hermite_integrals (_general_path), _run_bounds and table_products
+# (_toeplitz). numba's cache checks only the file a function is defined in, so after changing one of those
+# in a working copy, delete the caches (find src -name '*.nb[ic]' -delete): a caller here would keep the old
+# one compiled into it (in 0.4.4's development, a recursive pairwise_sum so kept crashed the process). An
+# installed upgrade rewrites every file, which resets them all.
 
 #: Default resolution: cells across the reference contact width (the widest contact of the history).
 DEFAULT_NODES = 1024
@@ -783,7 +791,7 @@ class GeneralSolver(TangentialSolver):
         iterations = restarts = 0
         while True:
             q, delta, status, Tq, it, cg, code, sizes, fitted = _toeplitz.active_set(
-                lat.lat.tables, spec, m, lat.idx, lat.C, r, qmax, float(total), status.astype(np.int8), qtol, stol,
+                lat.lat.tables, spec, m, lat.idx, lat.C, r, qmax, float(total), status, qtol, stol,
                 MAX_ACTIVE_SET * (restarts + 1) - iterations, CG_TOL, CG_ITERATIONS, side_of, now, phi, K, e, m1)
             iterations += it
             self.counters["cg_iterations"] += cg
@@ -1498,8 +1506,11 @@ def _match_points(x: np.ndarray, h: float) -> dict:
     return {-1: float(x[0]) - ARRIVAL_MATCH * h, 1: float(x[-1]) + ARRIVAL_MATCH * h}
 
 
+@functools.lru_cache(maxsize=64)
 def _no_fit(n: int):
-    """The active set's arrival arguments when nothing is fitted (GeneralSolver._arrival_fit's form)."""
+    """The active set's arrival arguments when nothing is fitted (GeneralSolver._arrival_fit's form), kept per
+    n: the compiled active set only reads them (left writable: a read-only array is another type to numba,
+    and the active set would be compiled twice)."""
     none = np.zeros((0, n))
     return np.full(n, -1, np.int64), none, none, none, np.zeros(0), np.zeros(0)
 
