@@ -1616,3 +1616,76 @@ def test_the_end_rules_polynomial_is_numpys_to_the_last_bit():
             got = general_module._polyval2d(float(w), float(u), rule)
             want = float(np.polynomial.polynomial.polyval2d(w, u, rule))
             assert got == want or (math.isnan(got) and math.isnan(want)), (w, u)
+
+
+@pytest.mark.parametrize("kind", ["hertz", "punch"])
+def test_the_compiled_shear_distance_is_the_numpy_route(kind, monkeypatch):
+    """The two lattices' shear distance behind each step's shear error estimate, int abs(q_fine - q_shadow)
+    dx with q = (q_j / cap_j) p in each cell, in one compiled pass (_shear_apart_kernel, since 0.4.4) against
+    numpy's steps written out here (the ratios, the shadow's cell of each fine centre, the sum): the same
+    number to the last bit at every step of a history that slips under P, Q, M and sigma."""
+    problem = NormalProblem(PROFILES[kind], A)
+    solver = GeneralSolver(problem, F, 256)
+    apart = general_module._shear_apart
+    seen = []
+
+    def checked(fine, coarse):
+        got = apart(fine, coarse)
+
+        def ratio(m):
+            return np.divide(m.q, m.capacity, out=np.zeros_like(m.q), where=m.capacity > 0.0)
+
+        J = np.clip(np.floor(fine.x / coarse.spacing).astype(np.int64) - coarse.first, 0, coarse.q.size - 1)
+        assert got == fine.spacing * float(np.sum(fine.capacity * np.abs(ratio(fine) - ratio(coarse)[J])))
+        seen.append(got)
+        return got
+
+    monkeypatch.setattr(general_module, "_shear_apart", checked)
+    scale = P0 * (1e-4 if kind == "hertz" else 2e-4)
+    path = [(P0, 0.3 * F * P0), (1.5 * P0, -0.2 * F * P0, 0.4 * scale, -3e7), (0.8 * P0, 0.5 * F * 0.8 * P0,
+            -0.6 * scale, 4e7), (1.2 * P0, -0.4 * F * 1.2 * P0, 0.2 * scale, 0.0)]
+    for state, report in march(solver, path):
+        assert report.converged
+    assert len(seen) >= 4 and all(v > 0.0 for v in seen[1:]), seen
+
+
+def test_the_compiled_start_pattern_is_the_python_route():
+    """A sub-step's start pattern moved part of the way towards the whole step's (_toward, compiled since
+    0.4.4) against the Python steps it replaced, written out here, on random patterns, overlaps and
+    fractions, halves included (Python's round takes half to even, and so does the compiled np.rint)."""
+    from types import SimpleNamespace
+
+    def python_route(now, end, fraction):
+        first, e = end
+        lo, hi = max(now.first, first), min(now.first + now.q.size, first + e.size)
+        if hi <= lo:
+            return None
+        s = e.copy()
+        s[lo - first:hi - first] = now.status[lo - now.first:hi - now.first]
+        for a, b in general_module._runs(s != e):
+            count = int(round(fraction * (b - a)))
+            if count == 0:
+                continue
+            if a > 0 and s[a - 1] == e[a]:
+                s[a:a + count] = e[a:a + count]
+            elif b < s.size and s[b] == e[b - 1]:
+                s[b - count:b] = e[b - count:b]
+        return first, s
+
+    rng = np.random.default_rng(11)
+    halves = 0
+    for _ in range(2000):
+        n, m = rng.integers(1, 40, 2)
+        status = np.repeat(rng.integers(-1, 2, 6).astype(np.int8), rng.integers(0, 12, 6))[:n]
+        e = np.repeat(rng.integers(-1, 2, 6).astype(np.int8), rng.integers(0, 12, 6))[:m]
+        if status.size == 0 or e.size == 0:
+            continue
+        now = SimpleNamespace(normal=object(), first=int(rng.integers(-5, 5)), status=status, q=np.zeros(status.size))
+        end = (int(rng.integers(-5, 5)), e)
+        fraction = float(rng.choice([0.5, 0.25, 1.0 / 3.0, 1.0, rng.uniform()]))
+        got, want = general_module._toward(now, end, fraction), python_route(now, end, fraction)
+        assert (got is None) == (want is None)
+        if got is not None:
+            assert got[0] == want[0] and np.array_equal(got[1], want[1])
+            halves += fraction == 0.5
+    assert halves > 100

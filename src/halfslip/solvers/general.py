@@ -1444,17 +1444,30 @@ def _toward(now: GeneralMemory, end, fraction: float):
     lo, hi = max(now.first, first), min(now.first + now.q.size, first + e.size)
     if hi <= lo:
         return None
+    return first, _toward_kernel(now.first, now.status, first, e, fraction, lo, hi)
+
+
+@numba.njit(cache=True)
+def _toward_kernel(first0, status0, first, e, fraction, lo, hi):  # pragma: no cover - compiled
+    """:func:`_toward`'s pattern: ``e`` (cells from ``first``) with the cells lo..hi - 1 both hold taken from
+    ``status0`` (cells from ``first0``), then each run that differs from ``e`` moved ``fraction`` of the way
+    (rounded half to even, as Python's round)."""
     s = e.copy()  # cells that arrive: as at the end
-    s[lo - first:hi - first] = now.status[lo - now.first:hi - now.first]
-    for a, b in _runs(s != e):
-        count = int(round(fraction * (b - a)))
+    for j in range(lo, hi):
+        s[j - first] = status0[j - first0]
+    runs = _run_bounds(s != e)
+    for r in range(runs.shape[0]):
+        a, b = runs[r, 0], runs[r, 1]
+        count = int(np.rint(fraction * (b - a)))
         if count == 0:
             continue
         if a > 0 and s[a - 1] == e[a]:
-            s[a:a + count] = e[a:a + count]
+            for j in range(a, a + count):
+                s[j] = e[j]
         elif b < s.size and s[b] == e[b - 1]:
-            s[b - count:b] = e[b - count:b]
-    return first, s
+            for j in range(b - count, b):
+                s[j] = e[j]
+    return s
 
 
 def _refined(coarse: GeneralMemory):
@@ -1875,13 +1888,25 @@ def _shear_apart(fine: GeneralMemory, coarse: GeneralMemory) -> float:
     Both shears are the cell's ratio chi_j = q_j / cap_j times the pressure, so
     the integral is sum_j h cap_j abs(chi_j - chi_J) over the fine cells j, J
     the shadow's cell holding j's centre (cells without load count nothing).
+    Compiled (:func:`_shear_apart_kernel`; the numbers of numpy's steps).
     """
-    def ratio(m):
-        cap = m.capacity
-        return np.divide(m.q, cap, out=np.zeros_like(m.q), where=cap > 0.0)
+    return _shear_apart_kernel(fine.first, fine.spacing, fine.q, fine.capacity, coarse.first, coarse.spacing,
+                               coarse.q, coarse.capacity)
 
-    J = np.clip(np.floor(fine.x / coarse.spacing).astype(np.int64) - coarse.first, 0, coarse.q.size - 1)
-    return fine.spacing * float(np.sum(fine.capacity * np.abs(ratio(fine) - ratio(coarse)[J])))
+
+@numba.njit(cache=True)
+def _shear_apart_kernel(first, h, q, cap, first_c, h_c, q_c, cap_c):  # pragma: no cover - compiled
+    """:func:`_shear_apart` of the fine cells from lattice index ``first`` (spacing ``h``, shear ``q``, loads
+    ``cap``) against the shadow's (``first_c``, ``h_c``, ``q_c``, ``cap_c``): h times numpy's sum
+    (:func:`pairwise_sum`) of cap_j abs(chi_j - chi_J)."""
+    n = q.size
+    terms = np.empty(n)
+    for j in range(n):
+        J = min(max(int(math.floor((first + 0.5 + j) * h / h_c)) - first_c, 0), q_c.size - 1)
+        chi = q[j] / cap[j] if cap[j] > 0.0 else 0.0
+        chi_c = q_c[J] / cap_c[J] if cap_c[J] > 0.0 else 0.0
+        terms[j] = cap[j] * abs(chi - chi_c)
+    return h * pairwise_sum(terms, 0, n)
 
 
 def _at_least(estimate: float, spread: float) -> float:
