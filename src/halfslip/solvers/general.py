@@ -669,18 +669,17 @@ class GeneralSolver(TangentialSolver):
         the dissipation of the cells that leave (its dissipation is not used)."""
         A, f = self.A, self.f
         first, n = _cells(N1.left, N1.right, h)
-        x = (first + 0.5 + np.arange(n)) * h
+        # the cells' centres, what each carries into the step and the pattern the active set starts from
+        old = mem.normal is not None
+        x, status, glock, G, cap0, known, start, arrived = _carried(
+            first, n, h, mem.first, *((mem.status, mem.g, mem.G, mem.capacity) if old else _NOTHING_CARRIED),
+            *(hint if hint is not None else (0, _NO_HINT)))
         cap = load.capacity(first, n, h)
         lat = self._lattice(h, n)
         # the end cells carry their shear like the pressure over their supports, which reach to the contact's
         # edges (as their loads cap do)
         ends = _end_supports(N1, first, n, h)
         lat = _EndCellLattice(lat, ends, self._take_columns(N1, first, n, h, ends, x), N1)
-        # what each cell carries into the step, and the pattern the active set starts from
-        old = mem.normal is not None
-        status, glock, G, cap0, known, start, arrived = _carried(
-            first, n, mem.first, *((mem.status, mem.g, mem.G, mem.capacity) if old else _NOTHING_CARRIED),
-            *(hint if hint is not None else (0, _NO_HINT)))
         g0 = before = fit_of = None
         if arrived:
             found = self._arrived(mem, N1, path, x, known, h, first, lat, glock) if old else None
@@ -1270,11 +1269,7 @@ class _Load:
     def capacity(self, first: int, n: int, spacing: float) -> np.ndarray:
         """(1/spacing) int p over each of the n cells from ``first``, the end cells extended to the edges
         (normalised so that spacing sum = P: the quadrature's own ~1e-10 would show in gross sliding)."""
-        cap = _cell_loads(self.cum, self.k0, self.inner, first, n, round(spacing / self.h), spacing)
-        total = float(np.sum(cap)) * spacing
-        if total > 0.0:
-            cap *= self.N.P / total
-        return cap
+        return _cell_loads(self.cum, self.k0, self.inner, first, n, round(spacing / self.h), spacing, self.N.P)
 
 
 @numba.njit(cache=True)
@@ -1345,12 +1340,15 @@ _NO_HINT = np.zeros(0, np.int8)
 
 
 @numba.njit(cache=True)
-def _carried(first, n, first0, status0, g0, G0, cap0, hint_first, hint):  # pragma: no cover - compiled
-    """What the n cells from lattice index ``first`` carry into a take from the memory whose cells start at
-    ``first0`` (its status, locked displacements, accumulated slip and capacities; empty: out of contact):
-    status, locks (not set where not carried), slip, capacity at the start, which cells are carried, the
-    start pattern (the status, overwritten by ``hint`` from ``hint_first`` where it has cells) and whether
-    any cell arrives."""
+def _carried(first, n, h, first0, status0, g0, G0, cap0, hint_first, hint):  # pragma: no cover - compiled
+    """What the n cells from lattice index ``first`` (spacing ``h``) carry into a take from the memory whose
+    cells start at ``first0`` (its status, locked displacements, accumulated slip and capacities; empty: out
+    of contact): their centres (GeneralMemory.x's), status, locks (not set where not carried), slip,
+    capacity at the start, which cells are carried, the start pattern (the status, overwritten by ``hint``
+    from ``hint_first`` where it has cells) and whether any cell arrives."""
+    x = np.empty(n)
+    for i in range(n):
+        x[i] = (first + 0.5 + i) * h
     status = np.zeros(n, np.int8)
     glock = np.empty(n)
     G = np.zeros(n)
@@ -1367,14 +1365,15 @@ def _carried(first, n, first0, status0, g0, G0, cap0, hint_first, hint):  # prag
     start = status.copy()
     for j in range(max(first, hint_first), min(first + n, hint_first + hint.size)):
         start[j - first] = hint[j - hint_first]
-    return status, glock, G, cap, known, start, hi - lo < n
+    return x, status, glock, G, cap, known, start, hi - lo < n
 
 
 @numba.njit(cache=True)
-def _cell_loads(cum, k0, inner, first, n, m, spacing):  # pragma: no cover - compiled
-    """_Load.capacity before its normalisation: (1/spacing) int p over each of the n cells from ``first`` (cells of
-    m table cells), from the table's cumulative loads ``cum`` (at the contact's left edge, its ``inner`` lattice
-    points from k0 and its right edge); the end cells reach to the edges."""
+def _cell_loads(cum, k0, inner, first, n, m, spacing, P):  # pragma: no cover - compiled
+    """_Load.capacity: (1/spacing) int p over each of the n cells from ``first`` (cells of m table cells), from
+    the table's cumulative loads ``cum`` (at the contact's left edge, its ``inner`` lattice points from k0 and
+    its right edge; the end cells reach to the edges), scaled so that spacing times their (numpy) sum is
+    ``P``."""
     cap = np.empty(n)
     last = cum.size - 1
     lo = 0.0
@@ -1386,6 +1385,11 @@ def _cell_loads(cum, k0, inner, first, n, m, spacing):  # pragma: no cover - com
             hi = cum[last]
         cap[j] = (hi - lo) / spacing
         lo = hi
+    total = pairwise_sum(cap, 0, n) * spacing
+    if total > 0.0:
+        scale = P / total
+        for j in range(n):
+            cap[j] *= scale
     return cap
 
 
