@@ -1572,8 +1572,9 @@ def test_the_compiled_leaving_cells_are_the_python_route(kind, monkeypatch):
     leaving = general_module.GeneralSolver._leaving
     seen = []
 
-    def checked(self, mem, N1, first, n, shift, x, q, h, sigma1):
-        got = leaving(self, mem, N1, first, n, shift, x, q, h, sigma1)
+    def checked(self, mem, N1, first, n, shift, x, q, h, sigma1, total):
+        assert total == float(np.sum(q))
+        got = leaving(self, mem, N1, first, n, shift, x, q, h, sigma1, total)
         cell = mem.first + np.arange(mem.q.size)
         out = ((cell < first) | (cell >= first + n)) & (mem.status != 0)
         if not np.any(out):

@@ -127,6 +127,8 @@ class EdgePath:
             dP, dM = P1 - P0, loads1.M - loads0.M
             self._h0 = np.array([start.left, start.right])
             self._h1 = np.array([end.left, end.right])
+            # the edges at lam_lo = 0: the interpolant's first end, exactly (its basis there is 1, 0, 0, -0)
+            self._start = float(start.left), float(start.right)
             self._v0 = np.array(start.edge_rates(dP, dM))
             self._v1 = np.array(end.edge_rates(dP, dM))
 

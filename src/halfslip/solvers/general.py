@@ -136,6 +136,8 @@ END_CELL_TERMS = 20
 #: 100 steps a cycle, 4 end cells and 2 tables a step, about 2 kB and 8 kB each at 1000 nodes).
 END_CELLS_KEPT = 512
 LOADS_KEPT = 256
+#: States whose sum of shear GeneralSolver keeps (the next take of each asks).
+SUMS_KEPT = 16
 #: Active-set iterations before the projected-gradient restart.
 MAX_ACTIVE_SET = 100
 #: the stick-set solves' conjugate gradients (several runs far apart): relative residual, iterations
@@ -404,6 +406,7 @@ class GeneralSolver(TangentialSolver):
         self._loads = _Kept(LOADS_KEPT)
         self._columns = _Kept(LOADS_KEPT)
         self._paths = _Kept(LOADS_KEPT)
+        self._sums = _Kept(SUMS_KEPT)  # sum q of the recent takes' states, by their q (the next take's datum term)
         self.counters = dict.fromkeys(("steps", "substeps", "iterations", "cg_iterations", "restarts",
                                        "normal_solves"), 0)
 
@@ -736,9 +739,10 @@ class GeneralSolver(TangentialSolver):
         shift = self._shift(delta_int, total, h, lat)
         if old and not shadow:
             # cells that leave the contact during the step while slipping dissipate until they leave
-            dissipation += self._leaving(mem, N1, first, n, shift, x, q, h, loads1.sigma)
+            dissipation += self._leaving(mem, N1, first, n, shift, x, q, h, loads1.sigma, total)
         memory = GeneralMemory(N1, h, first, _frozen(status), _frozen(q), _frozen(g), _frozen(G), _frozen(cap),
                                shift)
+        self._sums.put(None, (memory.q,), total)
         drives = _edge_drives(N1, loads0, loads1) if mem.normal is not None else None
         slipping = _slipping_edges(drives, loads0, loads1, f) if drives is not None else (False, False)
         drives = tuple((u / f, v) for u, v in drives) if any(slipping) else None
@@ -822,7 +826,7 @@ class GeneralSolver(TangentialSolver):
         l0, l1 = path.loads0, path.loads1
         ok, locks, g0, before, has, side_of, now, phi, K, cx, bef, m1, fitted = _arrival_terms(
             x, known, first, h, self.A, N0.center, N0.left, N0.right, t, mem.shift, mem.q, mem.first,
-            self._datum_factor(h, tab) * float(np.sum(mem.q)), 0.25 * self.A * l0.sigma,
+            self._datum_factor(h, tab) * self._sum(mem.q), 0.25 * self.A * l0.sigma,
             np.array([k for k, _, _ in old_ends], np.int64), olds[0].kernel_arguments(), olds[-1].kernel_arguments(),
             END_CELL_NEAR, LATTICE_POINT, path.hermite_arguments(-1), path.hermite_arguments(1), _GL_T, _GL_W,
             l1.Q - l0.Q, l1.sigma - l0.sigma, self.arrivals, np.array([k for k, _, _ in new_ends], np.int64),
@@ -946,7 +950,7 @@ class GeneralSolver(TangentialSolver):
             return None
         return side_of, np.array(now), np.array(phi), np.array(K), np.array(e), np.array(m1)
 
-    def _leaving(self, mem, N1, first, n, shift, x, q, h, sigma1) -> float:
+    def _leaving(self, mem, N1, first, n, shift, x, q, h, sigma1, total) -> float:
         """Dissipation of the cells that leave the contact during the step while slipping: the end state does
         not hold them, and until 0.3.5 their slip until they left was lost (tests/test_general.py,
         test_a_receding_contact_keeps_the_dissipation_of_the_cells_that_leave: against the exact method,
@@ -956,7 +960,7 @@ class GeneralSolver(TangentialSolver):
         Each slipped lam (g1 - g_start) until its centre left (lam the fraction of the step at which the
         receding edge passed it, linear in the edge's travel; g1 the displacement at its centre at the end,
         from the end's shear; its slip rate taken as steady), under LEAVING_PRESSURE times its capacity at
-        the start; none where that slip would oppose its shear.
+        the start; none where that slip would oppose its shear. ``total`` is sum q (the take's, numpy's).
         """
         lo, hi = mem.first, mem.first + mem.q.size
         if lo >= first and hi <= first + n:  # every old cell is still in contact
@@ -970,13 +974,18 @@ class GeneralSolver(TangentialSolver):
         bound = self.f * LEAVING_PRESSURE
         done, xs, at, terms = _leaving_terms(
             mem.first, mem.status, mem.g, mem.capacity, first, n, h, *edges, bound,
-            lat._kernel_to(max(hi - first, first + n - lo)), shift, q, self._datum_factor(h, lat) * float(np.sum(q)),
+            lat._kernel_to(max(hi - first, first + n - lo)), shift, q, self._datum_factor(h, lat) * total,
             0.25 * self.A * sigma1, self.A, np.array([k for k, _, _ in ends], np.int64), cells[0].kernel_arguments(),
             cells[-1].kernel_arguments(), END_CELL_NEAR, LATTICE_POINT)
         if not done:  # a point inside an end cell's support: the general displacement
             g1 = self._displacement(shift, x, q, h, sigma1, xs, N1)
             terms = _leaving_slip(xs, at, g1, mem.status, mem.g, mem.capacity, *edges, bound)
         return float(np.sum(terms)) * mem.spacing
+
+    def _sum(self, q: np.ndarray) -> float:
+        """float(np.sum(q)) of a state's shear, kept from the take that found it (its _settled's)."""
+        total = self._sums.get(None, (q,))
+        return float(np.sum(q)) if total is None else total
 
     def _shift(self, delta_int: float, total: float, h: float, lat: ToeplitzLattice) -> float:
         """The rigid shift in the package's datum of the lattice's internal one, ``total`` the sum of the
