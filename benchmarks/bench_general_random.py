@@ -262,6 +262,8 @@ def main(argv=None):
                          (max(diss), float(np.nanmax(diss_t)) if np.any(np.isfinite(diss_t)) else math.nan), mism, inter, failed, 1e3 * wall / steps, estimate, classes, other,
                          covered if name != "IC baseline" else None, np.percentile(sure, 95), e.size - sure.size))
             print(_fmt(rows[-1]), flush=True)
+    for line in equal_accuracy(rows):
+        print(line)
     if not args.no_doc:
         write_doc(rows, args, " ".join(sys.argv[1:]))
 
@@ -269,9 +271,28 @@ def main(argv=None):
 def _fmt(r):
     return (f"| {r[0]} | {r[1]} | {r[2]} | {r[3]:.1e} | {r[4]:.1e} | {r[17]:.1e} ({r[18]}) | {r[5]:.1e} | {r[6]:.1e} | "
             f"{r[7]:.1e} | "
-            f"{100 * r[8][0]:.2f} % / {100 * r[8][1]:.2f} % | {r[9]} | {r[10]} | {r[11]} | {r[12]:.1f} | "
+            f"{100 * r[8][0]:.2f} % / {100 * r[8][1]:.2f} % | {r[9]} | {r[10]} | {r[11]} | {r[12]:.3g} | "
             f"{'' if math.isnan(r[13]) else f'{r[13]:.1e}'} | {' / '.join(str(v) for v in r[14].values())} | "
             f"{r[15]:.1e} | {'' if r[16] is None else r[16]} |")
+
+
+def equal_accuracy(rows) -> list[str]:
+    """Per geometry, the speed-up at equal accuracy in this run: the IC baseline's finest row against the
+    fastest general row whose vouched 95th percentile is at most the baseline's (none: not reached)."""
+    out = []
+    for g in dict.fromkeys(r[2] for r in rows):
+        base = [r for r in rows if r[2] == g and r[0] == "IC baseline"]
+        if not base:
+            continue
+        ref = max(base, key=lambda r: r[1])
+        ours = [r for r in rows if r[2] == g and r[0] != "IC baseline" and r[17] <= ref[17]]
+        if not ours:
+            out.append(f"{g}: no resolution run reaches the baseline's {ref[17]:.1e} at N = {ref[1]}")
+            continue
+        best = min(ours, key=lambda r: r[12])
+        out.append(f"{g}: {best[1]} nodes, {best[17]:.1e} in {best[12]:.3g} ms per step, against N = {ref[1]}, "
+                   f"{ref[17]:.1e} in {ref[12]:.4g} ms: {ref[12] / best[12]:.1f}x")
+    return out
 
 
 def write_doc(rows, args, argv):
@@ -294,7 +315,9 @@ def write_doc(rows, args, argv):
             f"(bench_general_random.VOUCH). Steps whose outermost stick edge is off by more than "
             f"{EVERY_STEP:g} of the width are sorted into classes (bench_general_random.EXCEEDANCE): the reference's "
             f"own error estimate is at least a third of that; the reference's outermost stick point is an island at "
-            f"the contact edge and the solver's is not; the other way round; other.\n\n{head}\n" + "\n".join(_fmt(r) for r in rows) + f"\n{END}")
+            f"the contact edge and the solver's is not; the other way round; other.\n\n{head}\n" + "\n".join(_fmt(r) for r in rows)
+            + "\n\nAt equal accuracy (the fastest general row whose vouched 95th percentile is at most the IC "
+            "baseline's at its finest N, times from this run): " + "; ".join(equal_accuracy(rows)) + f".\n{END}")
     write_section(DOC, BEGIN, END, text, "The general solver on random histories (issue 14)")
 
 
