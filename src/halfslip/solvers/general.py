@@ -706,8 +706,8 @@ class GeneralSolver(TangentialSolver):
             iterations, restarts = 0, 0
             message = GROSS_SLIDING_MESSAGE if abs(loads1.Q) > f * loads1.P * (1.0 + 1e-12) else ""
         else:
-            # a constant in r only shifts delta: take the common offset out (the locked displacements
-            # carry the history's rigid slide, which may dwarf what the step changes)
+            # a constant in r only shifts delta: the common offset r0 (_take_inputs') is taken out (the locked
+            # displacements carry the history's rigid slide, which may dwarf what the step changes)
             gscale = A * qmax_max * h
             floor = ROUNDING * r_max
             tolerances = _decision_tolerances(qmax_max, gscale, floor)
