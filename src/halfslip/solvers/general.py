@@ -814,24 +814,19 @@ class GeneralSolver(TangentialSolver):
         if path is None or path.kind != "hermite":
             return None
         N0, n = mem.normal, x.size
-        old_ends, new_ends = _end_supports(N0, mem.first, mem.q.size, h), _end_supports(N1, first, n, h)
-        if not old_ends or not new_ends:
+        olds, news = self._end_arguments(N0, mem.first, mem.q.size, h), self._end_arguments(N1, first, n, h)
+        if olds is None or news is None:
             return None
         tab = lat.lat
         # the kernel table reaches from the old cells to the match points and over the take's cells
         span = max(first + n - 1 + ARRIVAL_MATCH - mem.first, mem.first + mem.q.size - 1 - first + ARRIVAL_MATCH)
         t = tab._kernel_to(max(span + 1, n + ARRIVAL_MATCH + 1))
-        olds = [self._end_cell(N0, mem.first, k, a, b, h) for k, a, b in old_ends]
-        news = [self._end_cell(N1, first, k, a, b, h) for k, a, b in new_ends]
         l0, l1 = path.loads0, path.loads1
         ok, locks, g0, before, has, side_of, now, phi, K, cx, bef, m1, fitted = _arrival_terms(
             x, known, first, h, self.A, N0.center, N0.left, N0.right, t, mem.shift, mem.q, mem.first,
-            self._datum_factor(h, tab) * self._sum(mem.q), 0.25 * self.A * l0.sigma,
-            np.array([k for k, _, _ in old_ends], np.int64), olds[0].kernel_arguments(), olds[-1].kernel_arguments(),
-            END_CELL_NEAR, LATTICE_POINT, path.hermite_arguments(-1), path.hermite_arguments(1), _GL_T, _GL_W,
-            l1.Q - l0.Q, l1.sigma - l0.sigma, self.arrivals, np.array([k for k, _, _ in new_ends], np.int64),
-            news[0].kernel_arguments(), news[-1].kernel_arguments(), ARRIVAL_MATCH, *ARRIVAL_SHAPE,
-            0.25 * self.A * l1.sigma)
+            self._datum_factor(h, tab) * self._sum(mem.q), 0.25 * self.A * l0.sigma, *olds, END_CELL_NEAR,
+            LATTICE_POINT, path.hermite_arguments(-1), path.hermite_arguments(1), _GL_T, _GL_W, l1.Q - l0.Q,
+            l1.sigma - l0.sigma, self.arrivals, *news, ARRIVAL_MATCH, *ARRIVAL_SHAPE, 0.25 * self.A * l1.sigma)
         if not ok:
             return None
         glock[~known] = locks
@@ -966,8 +961,6 @@ class GeneralSolver(TangentialSolver):
         if lo >= first and hi <= first + n:  # every old cell is still in contact
             return 0.0
         # the old cells on the take's lattice (the memory a take starts from is its own lattice's)
-        ends = _end_supports(N1, first, n, h)
-        cells = [self._end_cell(N1, first, k, a, b, h) for k, a, b in ends]
         lat = self._lattice(h, n)
         N0 = mem.normal
         edges = (N0.left, N0.right, N0.center, N1.left, N1.right)
@@ -975,8 +968,7 @@ class GeneralSolver(TangentialSolver):
         done, xs, at, terms = _leaving_terms(
             mem.first, mem.status, mem.g, mem.capacity, first, n, h, *edges, bound,
             lat._kernel_to(max(hi - first, first + n - lo)), shift, q, self._datum_factor(h, lat) * total,
-            0.25 * self.A * sigma1, self.A, np.array([k for k, _, _ in ends], np.int64), cells[0].kernel_arguments(),
-            cells[-1].kernel_arguments(), END_CELL_NEAR, LATTICE_POINT)
+            0.25 * self.A * sigma1, self.A, *self._end_arguments(N1, first, n, h), END_CELL_NEAR, LATTICE_POINT)
         if not done:  # a point inside an end cell's support: the general displacement
             g1 = self._displacement(shift, x, q, h, sigma1, xs, N1)
             terms = _leaving_slip(xs, at, g1, mem.status, mem.g, mem.capacity, *edges, bound)
@@ -1007,12 +999,10 @@ class GeneralSolver(TangentialSolver):
             # the usual case (the cells of a state, points on its lattice) in one compiled pass
             span, ri, ci = _lattice_indices(xs, np.ascontiguousarray(xc, dtype=float), spacing, LATTICE_POINT)
             if span:
-                cells = [self._end_cell(normal, first, k, a, b, spacing) for k, a, b in ends]
                 out, done = _displaced(shift, lat._kernel_to(span), ri, ci, np.ascontiguousarray(q, dtype=float),
                                        self._datum_factor(spacing, lat) * float(np.sum(q)), 0.25 * self.A * sigma,
-                                       xs, -(self.A / math.pi), np.array([k for k, _, _ in ends], np.int64),
-                                       cells[0].kernel_arguments(), cells[-1].kernel_arguments(), END_CELL_NEAR,
-                                       LATTICE_POINT)
+                                       xs, -(self.A / math.pi), *self._end_arguments(normal, first, xc.size, spacing),
+                                       END_CELL_NEAR, LATTICE_POINT)
                 if done:
                     return out
         bulk = 0.25 * self.A * sigma * xs
@@ -1034,6 +1024,16 @@ class GeneralSolver(TangentialSolver):
             cell = self._end_cells.put((a, b, first + k, h), (normal,),
                                        _EndCell(normal, a, b, (first + k) * h, h, self._kinks))
         return cell
+
+    def _end_arguments(self, normal, first: int, n: int, h: float):
+        """What the compiled passes (:func:`_displaced` and those that call it) take of the end cells of a state
+        of n cells from lattice index ``first``: their indices among its cells and the first and last cell's
+        :meth:`_EndCell.kernel_arguments` (the same cell for a contact of one cell); None out of contact."""
+        ends = _end_supports(normal, first, n, h)
+        if not ends:
+            return None
+        cells = [self._end_cell(normal, first, k, a, b, h) for k, a, b in ends]
+        return np.array([k for k, _, _ in ends], np.int64), cells[0].kernel_arguments(), cells[-1].kernel_arguments()
 
     def _end_columns(self, normal, first, h, ends, xs) -> np.ndarray:
         """(T' - T) at the points ``xs`` for the end cells ``ends`` [(k, a, b)] of a state whose cells start
