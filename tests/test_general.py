@@ -1518,6 +1518,12 @@ def test_the_arrivals_sizes_match_the_lattice_and_the_pattern_together(monkeypat
         assert out.residual <= 1.0
 
 
+def _moment_scale(kind: str) -> float:
+    """P0 times about a tenth of the contact's half-width at P0: the moments of the compiled-route tests'
+    histories."""
+    return P0 * (1e-4 if kind == "hertz" else 2e-4)
+
+
 @pytest.mark.parametrize("kind", ["hertz", "punch"])
 def test_the_compiled_arrivals_are_the_python_route(kind, monkeypatch):
     """A growing contact's arrivals and their fit in one compiled pass (GeneralSolver._arrived, since 0.4.4;
@@ -1551,7 +1557,7 @@ def test_the_compiled_arrivals_are_the_python_route(kind, monkeypatch):
         return got
 
     monkeypatch.setattr(general_module.GeneralSolver, "_arrived", checked)
-    scale = P0 * (1e-4 if kind == "hertz" else 2e-4)  # moments of about a tenth of the contact's half-width
+    scale = _moment_scale(kind)
     path = [(P0, 0.3 * F * P0), (1.5 * P0, -0.2 * F * P0, 0.4 * scale, -3e7), (2.2 * P0, 0.5 * F * P0, -0.6 * scale,
             4e7), (1.1 * P0, 0.1 * F * P0, 0.2 * scale, 0.0), (2.5 * P0, -0.6 * F * 2.5 * P0, 0.0, -2e7)]
     for state, report in march(solver, path):
@@ -1598,7 +1604,7 @@ def test_the_compiled_leaving_cells_are_the_python_route(kind, monkeypatch):
         return got
 
     monkeypatch.setattr(general_module.GeneralSolver, "_leaving", checked)
-    scale = P0 * (1e-4 if kind == "hertz" else 2e-4)  # moments of about a tenth of the contact's half-width
+    scale = _moment_scale(kind)
     path = [(2.5 * P0, 0.5 * F * 2.5 * P0, 0.3 * scale, 2e7), (1.2 * P0, -0.6 * F * 1.2 * P0, -0.5 * scale, -3e7),
             (0.6 * P0, 0.5 * F * 0.6 * P0, 0.4 * scale, 1e7)]
     for state, report in march(solver, path):
@@ -1642,7 +1648,7 @@ def test_the_compiled_shear_distance_is_the_numpy_route(kind, monkeypatch):
         return got
 
     monkeypatch.setattr(general_module, "_shear_apart", checked)
-    scale = P0 * (1e-4 if kind == "hertz" else 2e-4)
+    scale = _moment_scale(kind)
     path = [(P0, 0.3 * F * P0), (1.5 * P0, -0.2 * F * P0, 0.4 * scale, -3e7), (0.8 * P0, 0.5 * F * 0.8 * P0,
             -0.6 * scale, 4e7), (1.2 * P0, -0.4 * F * 1.2 * P0, 0.2 * scale, 0.0)]
     for state, report in march(solver, path):
