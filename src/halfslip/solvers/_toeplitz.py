@@ -875,13 +875,20 @@ def stick_solve(tab, spec, m, runs, n, idx, C, W, cg_tol, cg_max):  # pragma: no
     way, longest = route(runs)
     cg = 0
     if way == ONE_RUN:
-        y = gs_solve(tab, size, ext)
-        unit = _unit(tab, size)
-        Y = np.empty((size, k + ns + 1))
-        for i in range(size):
-            Y[i, 0] = unit[i]
-            for c in range(k + ns):
-                Y[i, c + 1] = y[i, c]
+        keys, units = tab[3], tab[5]
+        slot = size % keys.shape[1]
+        if keys[1, slot] == size:  # T_n^-1 1 cached (_unit)
+            y = gs_solve(tab, size, ext)
+            Y = np.empty((size, k + ns + 1))
+            for i in range(size):
+                Y[i, 0] = units[slot, i]
+                for c in range(k + ns):
+                    Y[i, c + 1] = y[i, c]
+        else:  # the column of ones in the same solve (a column more costs less than a solve of its own), cached
+            Y = gs_solve(tab, size, _with_ones(ext))
+            for i in range(size):
+                units[slot, i] = Y[i, 0]
+            keys[1, slot] = size
     elif way == ISLANDS:
         Y = _island_solve(tab, runs, longest, _with_ones(ext))
     elif way == GAPS:
