@@ -436,7 +436,7 @@ def _moments_from(data: _PieceIntegrals, half_width: FloatArray) -> _Moments:
 
     slope, curvature, magnitude = _moments_kernel(
         data.cos_integrals, np.ascontiguousarray(data.value), np.ascontiguousarray(data.curvature),
-        np.ascontiguousarray(np.broadcast_to(data.c2, data.value.shape)),
+        np.array(np.broadcast_to(data.c2, data.value.shape), dtype=float),  # (writable, as its compiled callers')
         np.ascontiguousarray(half_width, dtype=float).reshape(-1), _SLOPE_MOMENTS, _CURVATURE_MOMENTS)
     return _Moments(slope=slope, curvature=curvature, slope_magnitude=magnitude)
 

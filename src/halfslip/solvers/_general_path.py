@@ -59,6 +59,8 @@ def _tanh_sinh(n: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 _U, _W = _tanh_sinh(ARRIVAL_POINTS)
+# read-only, as compiled code sees module arrays: _strain_sum is then compiled once for its Python and compiled callers
+_U.flags.writeable = _W.flags.writeable = False
 
 
 class EdgePath:

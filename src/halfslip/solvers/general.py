@@ -739,6 +739,7 @@ class GeneralSolver(TangentialSolver):
                                 A * f * cap_max * h, ROUNDING * locked)
         dissipation = spent * h
         shift = self._shift(delta_int, total, h, lat)
+        q = _frozen(q)  # (the state's, below; read-only before _leaving's compiled passes take it, as a state's q)
         if old and not shadow:
             # cells that leave the contact during the step while slipping dissipate until they leave
             dissipation += self._leaving(mem, N1, first, n, shift, x, q, h, loads1.sigma, total)
@@ -1351,7 +1352,8 @@ def _closed_form_loads(left, right, h, k0, k1, P, x0, d, c0, c1, knots, jumps, p
     return inner, cum, largest
 
 
-_NOTHING_CARRIED = (np.zeros(0, np.int8), np.zeros(0), np.zeros(0), np.zeros(0))
+# read-only as a state's arrays are: numba compiles _carried once for both (a read-only array is a type of its own)
+_NOTHING_CARRIED = tuple(_frozen(a) for a in (np.zeros(0, np.int8), np.zeros(0), np.zeros(0), np.zeros(0)))
 _NO_HINT = np.zeros(0, np.int8)
 
 
@@ -1847,7 +1849,7 @@ def _undecided_reach(x, q, qmax, s, status, N, h, i, k, slipping, drives, edges,
             else:  # the slipping cells that do not slip stick
                 alt[end + step * (1 + np.arange(count))] = 0
                 a, b = (i - count, k) if side == 0 else (i, k + count)
-            other = _run_edges(x, q, qmax, alt, N, h, a, b, slipping, drives)[side]
+            other = _run_edges(x, q, qmax, _frozen(alt), N, h, a, b, slipping, drives)[side]
             # (that edge is placed to EDGE_PLACEMENT as any other)
             reach = max(reach, abs(other - edges[side]) / h + EDGE_PLACEMENT)
     return reach
