@@ -384,14 +384,29 @@ def gs_solve(tab, n, W):  # pragma: no cover - compiled
 @numba.njit(cache=True)
 def _unit(tab, n):  # pragma: no cover - compiled
     """T_n^-1 1, cached (ToeplitzLattice.unit)."""
+    units, slot = tab[5], _unit_slot(tab, n)
+    if slot < 0:
+        slot = _keep_unit(tab, n, gs_solve(tab, n, np.ones((n, 1))))
+    return units[slot, :n]
+
+
+@numba.njit(cache=True)
+def _unit_slot(tab, n):  # pragma: no cover - compiled
+    """The cache slot holding T_n^-1 1, -1 when it does not."""
+    keys = tab[3]
+    slot = n % keys.shape[1]
+    return slot if keys[1, slot] == n else -1
+
+
+@numba.njit(cache=True)
+def _keep_unit(tab, n, Y):  # pragma: no cover - compiled
+    """Cache T_n^-1 1, the first column of ``Y``; its slot."""
     keys, units = tab[3], tab[5]
     slot = n % keys.shape[1]
-    if keys[1, slot] != n:
-        y = gs_solve(tab, n, np.ones((n, 1)))
-        for i in range(n):
-            units[slot, i] = y[i, 0]
-        keys[1, slot] = n
-    return units[slot, :n]
+    for i in range(n):
+        units[slot, i] = Y[i, 0]
+    keys[1, slot] = n
+    return slot
 
 
 @numba.njit(cache=True)
@@ -875,20 +890,17 @@ def stick_solve(tab, spec, m, runs, n, idx, C, W, cg_tol, cg_max):  # pragma: no
     way, longest = route(runs)
     cg = 0
     if way == ONE_RUN:
-        keys, units = tab[3], tab[5]
-        slot = size % keys.shape[1]
-        if keys[1, slot] == size:  # T_n^-1 1 cached (_unit)
+        slot = _unit_slot(tab, size)
+        if slot >= 0:  # T_n^-1 1 cached
             y = gs_solve(tab, size, ext)
             Y = np.empty((size, k + ns + 1))
             for i in range(size):
-                Y[i, 0] = units[slot, i]
+                Y[i, 0] = tab[5][slot, i]
                 for c in range(k + ns):
                     Y[i, c + 1] = y[i, c]
-        else:  # the column of ones in the same solve (a column more costs less than a solve of its own), cached
+        else:  # the column of ones in the same solve (a column more costs less than a solve of its own), kept
             Y = gs_solve(tab, size, _with_ones(ext))
-            for i in range(size):
-                units[slot, i] = Y[i, 0]
-            keys[1, slot] = size
+            _keep_unit(tab, size, Y)
     elif way == ISLANDS:
         Y = _island_solve(tab, runs, longest, _with_ones(ext))
     elif way == GAPS:
