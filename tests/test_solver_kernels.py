@@ -370,6 +370,24 @@ def test_solve_runs_is_the_dense_solve_on_the_stick_set(lattice, case):
     assert _rel(got, ref) <= 1e-11
 
 
+def test_one_run_solves_the_ones_column_with_the_rest_then_keeps_it():
+    """On one run, T_n^-1 1 not yet cached is solved as one more column of the same solve and kept: the
+    first solve (not cached) and the second (cached) both give the dense answer, and the kept column is
+    T_n^-1 1 (a fresh lattice: nothing cached before)."""
+    fresh = ToeplitzLattice(H, SIZE, A)
+    runs, n = [(10, 290)], 280
+    assert tz._unit_slot(fresh.tables, n) == -1
+    rhs = np.random.default_rng(5).standard_normal((n, 2))
+    ref = _stick_solve(fresh, runs, SIZE, np.column_stack((np.ones(n), rhs)))
+    first, _ = fresh.solve_runs(runs, SIZE, rhs, ones=True)
+    slot = tz._unit_slot(fresh.tables, n)
+    assert slot >= 0
+    assert _rel(fresh.tables[5][slot, :n], np.linalg.solve(_dense(fresh, n), np.ones(n))) <= 1e-11
+    second, _ = fresh.solve_runs(runs, SIZE, rhs, ones=True)
+    assert _rel(first, ref) <= 1e-11 and _rel(second, ref) <= 1e-11
+    assert np.array_equal(first[:, 0], second[:, 0])
+
+
 @pytest.mark.parametrize("runs,way", [
     ([(0, 5), (100, 229), (290, 291)], tz.ISLANDS),   # 6 island cells, 156 gap cells: 5 x 6 <= 156
     ([(0, 17), (110, 400)], tz.ISLANDS),               # 17 island cells, 93 gap cells: 5 x 17 <= 93
