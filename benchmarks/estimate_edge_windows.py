@@ -9,7 +9,8 @@ the 95th percentile of their errors over the edges the reference vouches for is 
 (bench_general_random.compare's measure): the accuracy a lattice of the base cells with windows of W cells
 at both contact edges refined to the fine cells would reach if the windows placed their edges as the fine
 lattice does. An estimate of what grading can give, not a run of it: the windows' own coupling to the
-coarse cells is assumed to cost nothing in accuracy.
+coarse cells is assumed to cost nothing in accuracy. With ``--coupling`` it also prints what that coupling
+costs in the coarse lattice's solves (:func:`coupling_ranks`).
 """
 from __future__ import annotations
 
@@ -43,6 +44,41 @@ def vouched_errors(runs, ref, geometry, base, fine, window):
     return np.concatenate(out)
 
 
+def coupling_ranks(window=16, refine=4, cells=512, tolerances=(1e-7, 1e-10)):
+    """Numerical ranks of what a window's refinement adds, seen from the coarse cells beyond it: the
+    displacements at the coarse centres outside a window of ``window`` cells at the contact's edge whose cells
+    are each cut into ``refine`` sub-cells carrying zero-mean patterns (Haar-like: the (refine - 1) patterns
+    per cell that a constant shear per coarse cell cannot carry), the log kernel integrated over each
+    sub-cell (cells of width 1). Each such rank is a column more in every stick-set solve of the coarse
+    lattice (a Woodbury or Schur-complement coupling). Returns {(first coarse cell beyond the window, tol):
+    rank}. The entries are differences of terms about 1e-11 of them apart in rounding, so tolerances below
+    ~1e-10 read the noise."""
+    def integral(x, a, b):  # int_a^b ln|x - xi| dxi, G(u) = u ln|u| - u
+        def G(u):
+            with np.errstate(divide="ignore", invalid="ignore"):
+                return np.where(u != 0.0, u * np.log(np.abs(u)) - u, 0.0)
+        return G(x[:, None] - a[None, :]) - G(x[:, None] - b[None, :])
+
+    sub = 1.0 / refine
+    patterns = []
+    for k in range(1, refine):  # zero-mean Haar-like patterns on the sub-cells
+        p = np.zeros(refine)
+        p[:k], p[k:] = 1.0 / k, -1.0 / (refine - k)
+        patterns.append(p)
+    out = {}
+    for gap in (0, 2, 8, 16):
+        x = np.arange(window + gap, cells) + 0.5
+        columns = []
+        for c in range(window):
+            a = c + sub * np.arange(refine)
+            block = integral(x, a, a + sub)
+            columns += [block @ p for p in patterns]
+        s = np.linalg.svd(np.column_stack(columns), compute_uv=False)
+        for tol in tolerances:
+            out[(window + gap, tol)] = int(np.sum(s > tol * s[0]))
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--geometries", nargs="+", default=["hertz", "punch"])
@@ -50,7 +86,15 @@ def main(argv=None):
     ap.add_argument("--fine", type=int, default=2048)
     ap.add_argument("--windows", type=int, nargs="+", default=[0, 8, 16, 32])
     ap.add_argument("--seeds", type=int, default=2)
+    ap.add_argument("--coupling", action="store_true", help="also the ranks of a window's coupling (coupling_ranks)")
     args = ap.parse_args(argv)
+    if args.coupling:
+        ranks = coupling_ranks(window=max(args.windows), cells=min(args.base))
+        print("| coarse centres from cell | tolerance | rank of a window's added patterns there |")
+        print("|---:|---:|---:|")
+        for (start, tol), rank in ranks.items():
+            print(f"| {start} | {tol:g} | {rank} |")
+        print()
     ref = np.load(bench.REFERENCE)
     print("| geometry | base nodes | window (base cells at each contact edge) | as at | vouched 95th pct |")
     print("|---|---:|---:|---:|---:|")
