@@ -1269,16 +1269,13 @@ class _Load:
         bounds = np.concatenate(([N.left], pts, [N.right]))
         th = np.arccos(np.clip((c - bounds) / d, -1.0, 1.0))
         lo, span = th[:-1], np.diff(th)
-        t = lo[:, None] + span[:, None] * _GL_T[None, :]
-        part = (N.pressure(c - d * np.cos(t)) * d * np.sin(t)) @ _GL_W * span
+        near = np.zeros(bounds.size - 1, bool)
         if extra.size:
             # the intervals next to a kink (and its grading): p is x ln x there, KINK_GAUSS points
             at = np.searchsorted(bounds, extra)  # extra's places among the bounds (all of them are there)
-            near = np.zeros(bounds.size - 1, bool)
             near[at - 1] = near[np.minimum(at, bounds.size - 2)] = True
             near[:2] = near[-2:] = True
-            tk = lo[near, None] + span[near, None] * _KINK_T[None, :]
-            part[near] = (N.pressure(c - d * np.cos(tk)) * d * np.sin(tk)) @ _KINK_W * span[near]
+        part = _interval_loads(lo, span, near, c, d, _GL_T, _GL_W, _KINK_T, _KINK_W, N.pressure_arguments())
         cum = np.concatenate(([0.0], np.cumsum(part)))  # at bounds
         at = np.searchsorted(pts, inner) + 1  # the lattice points among the bounds
         self.cum = np.concatenate(([0.0], cum[at], [cum[-1]]))
@@ -1287,6 +1284,40 @@ class _Load:
         """(1/spacing) int p over each of the n cells from ``first``, the end cells extended to the edges
         (normalised so that spacing sum = P: the quadrature's own ~1e-10 would show in gross sliding)."""
         return _cell_loads(self.cum, self.k0, self.inner, first, n, round(spacing / self.h), spacing, self.N.P)
+
+
+@numba.njit(cache=True)
+def _interval_loads(lo, span, near, c, d, t, w, tk, wk, pressure):  # pragma: no cover - compiled
+    """int p over each interval [theta_i, theta_i + span_i] of x = c - d cos(theta) (_Load's quadrature): p d
+    sin(theta) at the Gauss-Legendre points ``t`` (weights ``w``) of the interval, those ``near`` a kink at
+    ``tk`` (``wk``); ``pressure`` is _geometry_kernels._pressure_at's arguments. The pressure in one call over
+    every point (until 0.4.4 numpy's arrays of every interval at both rules: 0.9 ms a contact of 2048 cells,
+    a quarter of the rounded punch's step on the random histories there)."""
+    m = lo.size
+    count = 0
+    for i in range(m):
+        count += tk.size if near[i] else t.size
+    xs = np.empty(count)
+    ds = np.empty(count)
+    k = 0
+    for i in range(m):
+        nodes = tk if near[i] else t
+        for j in range(nodes.size):
+            th = lo[i] + span[i] * nodes[j]
+            xs[k] = c - d * math.cos(th)
+            ds[k] = d * math.sin(th)
+            k += 1
+    p = _pressure_at(xs, *pressure)
+    out = np.empty(m)
+    k = 0
+    for i in range(m):
+        weights = wk if near[i] else w
+        total = 0.0
+        for j in range(weights.size):
+            total += p[k] * ds[k] * weights[j]
+            k += 1
+        out[i] = total * span[i]
+    return out
 
 
 @numba.njit(cache=True)
