@@ -1256,11 +1256,12 @@ class _Load:
         self.k0 = math.ceil(N.left / h)
         # the lattice points inside the contact, the closed form there and the size of its terms, which varies
         # smoothly along the contact: LOAD_SAMPLES samples find its largest
+        limit = LOAD_ROUNDING * N.P * h / (N.right - N.left)  # the rounding the closed form may have
         inner, cum, size = _closed_form_loads(N.left, N.right, h, self.k0, math.floor(N.right / h), N.P,
-                                              *N.pressure_arguments())
+                                              *N.pressure_arguments(), limit)
         self.k0 = round(inner[0] / h) if inner.size else self.k0
         self.inner = inner.size
-        self.closed_form = EPS * size <= LOAD_ROUNDING * N.P * h / (N.right - N.left)
+        self.closed_form = EPS * size <= limit
         if self.closed_form:
             self.cum = cum
             return
@@ -1376,11 +1377,13 @@ def _lattice_indices(xs, xc, spacing, tol):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
-def _closed_form_loads(left, right, h, k0, k1, P, x0, d, c0, c1, knots, jumps, piA):  # pragma: no cover - compiled
+def _closed_form_loads(left, right, h, k0, k1, P, x0, d, c0, c1, knots, jumps, piA, limit):  # pragma: no cover
     """_Load's closed form in one call: the lattice points k h (k0 <= k <= k1) strictly inside the contact
     [left, right], int p from its left edge to the left edge, each of them and the right edge (0, ..., P:
     NormalSolution.load_to; ``x0`` .. ``piA`` the compiled pressure's arguments) and the largest size of
-    that sum's terms at LOAD_SAMPLES points from edge to edge (np.linspace's)."""
+    that sum's terms at LOAD_SAMPLES points from edge to edge (np.linspace's); the loads are left out (an
+    empty array) where EPS times that size, the closed form's rounding, exceeds ``limit``: the caller then
+    takes the quadrature (_Load, the same test)."""
     samples = np.empty(LOAD_SAMPLES)
     step = (right - left) / (LOAD_SAMPLES - 1)
     for i in range(LOAD_SAMPLES - 1):
@@ -1402,6 +1405,8 @@ def _closed_form_loads(left, right, h, k0, k1, P, x0, d, c0, c1, knots, jumps, p
     largest = -np.inf
     for i in range(size.size):
         largest = max(largest, size[i] * scale)
+    if not EPS * largest <= limit:
+        return inner, np.empty(0), largest
     total, _ = _load_to_terms(inner, x0, d, c0, c1, knots, jumps, False)
     cum = np.empty(total.size + 2)
     cum[0] = 0.0
