@@ -247,7 +247,8 @@ _GL_T, _GL_W = 0.5 * (_GL_T + 1.0), 0.5 * _GL_W
 #: theta) from every knot of the pressure (its x ln x points), where p d sin(theta) is analytic in an ellipse
 #: about the interval with semi-axes sum rho >= 2 FAR_SPANS = 60: the n-point rule's error is then below
 #: 64 / 15 max|f| rho^(-2n) / (rho^2 - 1), 7e-18 max|f| for n = 4, far below the quadrature's 1e-14 of a
-#: cell's load (tests/test_stress_general.py: test_capacity_is_the_mean_pressure_of_each_cell). Most cells of a
+#: cell's load (tests/test_stress_general.py: test_the_load_quadratures_far_rule_is_the_eight_point_rule, and the
+#: capacities against an independent quadrature, test_capacity_is_the_mean_pressure_of_each_cell). Most cells of a
 #: rounded punch are that far from the flat's ends: the quadrature takes half the pressure evaluations.
 FAR_GAUSS, FAR_SPANS = 4, 30.0
 _FAR_T, _FAR_W = np.polynomial.legendre.leggauss(FAR_GAUSS)
@@ -1304,8 +1305,8 @@ def _interval_loads(lo, span, near, c, d, t, w, tk, wk, tf, wf, far, pressure): 
     ``tk`` (``wk``), those at least ``far`` spans from every knot of the pressure (its x ln x points: p d
     sin(theta) is analytic elsewhere, the square roots at the edges taken out by theta) at ``tf`` (``wf``);
     ``pressure`` is _geometry_kernels._pressure_at's arguments. The pressure in one call over every point
-    (until 0.4.4 numpy's arrays of every interval at both rules: 0.9 ms a contact of 2048 cells, a quarter of
-    the rounded punch's step on the random histories there)."""
+    (until 607df68 numpy's arrays of every interval at both rules: 0.9 ms a contact of 2048 cells, a quarter
+    of the rounded punch's step on the random histories there; 0.4 ms with this and the far rule)."""
     m = lo.size
     x0, half, knots = pressure[0], pressure[1], pressure[4]
     marks = np.empty(knots.size)  # the knots inside the contact, in theta
