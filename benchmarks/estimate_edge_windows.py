@@ -53,11 +53,10 @@ def coupling_ranks(window=16, refine=4, cells=512, tolerances=(1e-7, 1e-10)):
     lattice (a Woodbury or Schur-complement coupling). Returns {(first coarse cell beyond the window, tol):
     rank}. The entries are differences of terms about 1e-11 of them apart in rounding, so tolerances below
     ~1e-10 read the noise."""
-    def integral(x, a, b):  # int_a^b ln|x - xi| dxi, G(u) = u ln|u| - u
-        def G(u):
-            with np.errstate(divide="ignore", invalid="ignore"):
-                return np.where(u != 0.0, u * np.log(np.abs(u)) - u, 0.0)
-        return G(x[:, None] - a[None, :]) - G(x[:, None] - b[None, :])
+    from halfslip.solvers._toeplitz import _G  # u ln|u| - u, the lattice kernel's antiderivative
+
+    def integral(x, a, b):  # int_a^b ln|x - xi| dxi
+        return _G(x[:, None] - a[None, :]) - _G(x[:, None] - b[None, :])
 
     sub = 1.0 / refine
     patterns = []

@@ -753,7 +753,7 @@ class GeneralSolver(TangentialSolver):
         if old and not shadow:
             # cells that leave the contact during the step while slipping dissipate until they leave
             dissipation += self._leaving(mem, N1, first, n, shift, x, q, h, loads1.sigma, total)
-        memory = GeneralMemory(N1, h, first, _frozen(status), _frozen(q), _frozen(g), _frozen(G), _frozen(cap),
+        memory = GeneralMemory(N1, h, first, _frozen(status), q, _frozen(g), _frozen(G), _frozen(cap),
                                shift)
         self._sums.put(None, (memory.q,), total)
         drives = _edge_drives(N1, loads0, loads1) if mem.normal is not None else None
@@ -1262,7 +1262,7 @@ class _Load:
                                               *N.pressure_arguments(), limit)
         self.k0 = round(inner[0] / h) if inner.size else self.k0
         self.inner = inner.size
-        self.closed_form = EPS * size <= limit
+        self.closed_form = cum.size > 0  # (_closed_form_loads leaves the loads out where EPS size > limit)
         if self.closed_form:
             self.cum = cum
             return
