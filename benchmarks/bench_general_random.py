@@ -41,8 +41,9 @@ DOC = ROOT / "docs" / "benchmarks.md"
 BEGIN, END = "<!-- general_random: begin -->", "<!-- general_random: end -->"
 
 
-def run_solver(geometry, seed, nodes, repeat=1, estimate=True):
-    """Step the package's general solver through one history; per-step records and the best wall time."""
+def run_solver(geometry, seed, nodes, repeat=1, estimate=True, **options):
+    """Step the package's general solver through one history; per-step records and the best wall time
+    (``options``: GeneralSolver's, such as travel and stick_travel; its counts of sub-steps and takes)."""
     from halfslip.simulator import reference_width
     from halfslip.solvers.general import GeneralSolver as LatticeSolver
     from halfslip.state import Loads
@@ -53,7 +54,7 @@ def run_solver(geometry, seed, nodes, repeat=1, estimate=True):
     width = reference_width(scene, problem)
     best = math.inf
     for _ in range(repeat):
-        solver = LatticeSolver(problem, info["friction"], nodes, width=width, estimate=estimate)
+        solver = LatticeSolver(problem, info["friction"], nodes, width=width, estimate=estimate, **options)
         solver._lattice(width / nodes, nodes + 8)  # the lattice set-up (once per run) is not a step
         if estimate:
             solver._lattice(2 * width / nodes, nodes // 2 + 8)
@@ -80,6 +81,7 @@ def run_solver(geometry, seed, nodes, repeat=1, estimate=True):
     out = {k: np.asarray(v) for k, v in rec.items()}
     out["wall"] = best
     out["steps"] = t.size - 1
+    out.update({k: solver.counters[k] for k in ("substeps", "takes", "shadow_takes")})  # (the last pass's)
     return out
 
 

@@ -379,7 +379,8 @@ class GeneralSolver(TangentialSolver):
     datum : float
         Length l of the log-kernel datum of the rigid shift (profile length scale).
     counters : dict
-        Work done: steps, active-set iterations, CG iterations, restarts, normal solves.
+        Work done: steps, sub-steps, takes (the fine and the shadow lattice's solves of a step or
+        sub-step), active-set iterations, CG iterations, restarts, normal solves.
     """
 
     name = "general"
@@ -417,8 +418,8 @@ class GeneralSolver(TangentialSolver):
         self._end_args = _Kept(LOADS_KEPT)  # _end_arguments' answers
         self._paths = _Kept(LOADS_KEPT)
         self._sums = _Kept(SUMS_KEPT)  # sum q of the recent takes' states, by their q (the next take's datum term)
-        self.counters = dict.fromkeys(("steps", "substeps", "iterations", "cg_iterations", "restarts",
-                                       "normal_solves"), 0)
+        self.counters = dict.fromkeys(("steps", "substeps", "takes", "shadow_takes", "iterations", "cg_iterations",
+                                       "restarts", "normal_solves"), 0)
 
     # ------------------------------------------------------------------
     def initial_state(self, t0: float = 0.0) -> ContactState:
@@ -683,6 +684,7 @@ class GeneralSolver(TangentialSolver):
         unique, the start sets only how many iterations it takes). The ``shadow`` lattice's take leaves out
         the dissipation of the cells that leave (its dissipation is not used)."""
         A, f = self.A, self.f
+        self.counters["shadow_takes" if shadow else "takes"] += 1
         first, n = _cells(N1.left, N1.right, h)
         # the cells' centres, what each carries into the step and the pattern the active set starts from
         old = mem.normal is not None
