@@ -454,13 +454,13 @@ class GeneralSolver(TangentialSolver):
                 # that asks for sub-steps, this is the step
                 if not fine.slipped or rough.slipped or (pieces := self._pieces(state, ctx, fine)) <= 1:
                     return self._finish(state, t1, loads1, ctx, fine, rough)[:2]
-                end = (fine.memory.first, fine.memory.status)
+                end = (fine.memory.first, fine.memory.status.copy())  # (writable, as _refined's: one compiled _toward_kernel)
         else:
             fine = self._take(state.memory, ctx.h, state.loads, loads1, ctx.N1, ctx.path, ctx.load)
             pieces = self._pieces(state, ctx, fine)
             if pieces <= 1:
                 return self._finish(state, t1, loads1, ctx, fine, None)[:2]
-            end = (fine.memory.first, fine.memory.status)
+            end = (fine.memory.first, fine.memory.status.copy())
         self.counters["substeps"] += pieces
         loads0, t0 = state.loads, state.t
         # a step from separation: the sub-steps share the part of the step in contact
