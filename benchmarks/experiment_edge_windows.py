@@ -139,21 +139,7 @@ class Windows:
         T = S._products(xf, xf, hf, np.eye(nf))
         # locks: the composite state's displacement at the start; arrivals M1's, or the lattice's size
         lock = self._displacement(mem0, state.loads, xf)
-        arrived = ~((xf > N0.left) & (xf < N0.right))
-        if np.any(arrived):
-            edge = N0.left if side < 0 else N0.right
-            xe = xf[arrived]
-            inc = side * G._integrate(ctx.path, xe, edge, side, S.A, None)
-            xc = m1.x[coarse]
-            stuck = ((xc < N0.left) | (xc > N0.right)) & (np.asarray(m1.status)[coarse] == 0)
-            if fine.regime == G.Regime.PARTIAL_SLIP and np.any(stuck):
-                k = np.flatnonzero(stuck)[0 if side < 0 else -1]
-                g0 = S._displacement(mem0.shift, mem0.x, mem0.q, mem0.spacing, state.loads.sigma, xc[k:k + 1], N0)[0]
-                unit = side * G._integrate(ctx.path, xc[k:k + 1], edge, side, S.A, None, G.ARRIVAL_SHAPE)[0]
-                if unit != 0.0:
-                    inc = (m1.g[coarse[k]] - g0) / unit * side * G._integrate(ctx.path, xe, edge, side, S.A, None,
-                                                                              G.ARRIVAL_SHAPE)
-            lock[arrived] += inc
+        lock += self._arrivals(state, ctx, fine, side, xf, coarse)
         # the active set: g = gout + c - T q; stick g = lock; slip q = s f cap with s (g - lock) >= 0;
         # h_f sum q = the lattice's force over its window cells
         force = h * float(np.sum(np.asarray(m1.q)[coarse]))
@@ -191,9 +177,41 @@ class Windows:
         if not converged:
             self.failed += 1
             return window, None
+        return window, self._edge(window, status, q, qmax, state, loads1, ctx, side)
+
+    def _arrivals(self, state, ctx, fine, side, xf, coarse):
+        """What the fine cells centred at ``xf`` that arrive in the take add to their locks (0 elsewhere): M1's
+        increments, or where the lattice's take slipped in part and has a stuck arrived cell on this side
+        (``coarse``: the lattice cells under the window), the arrivals' shape with the lattice's size there."""
+        S, G = self.solver, self.G
+        m1, mem0 = fine.memory, state.memory
+        N0 = mem0.normal
+        out = np.zeros(xf.size)
+        arrived = ~((xf > N0.left) & (xf < N0.right))
+        if not np.any(arrived):
+            return out
+        edge = N0.left if side < 0 else N0.right
+        xe = xf[arrived]
+        inc = side * G._integrate(ctx.path, xe, edge, side, S.A, None)
+        xc = m1.x[coarse]
+        stuck = ((xc < N0.left) | (xc > N0.right)) & (np.asarray(m1.status)[coarse] == 0)
+        if fine.regime == G.Regime.PARTIAL_SLIP and np.any(stuck):
+            k = np.flatnonzero(stuck)[0 if side < 0 else -1]
+            g0 = S._displacement(mem0.shift, mem0.x, mem0.q, mem0.spacing, state.loads.sigma, xc[k:k + 1], N0)[0]
+            unit = side * G._integrate(ctx.path, xc[k:k + 1], edge, side, S.A, None, G.ARRIVAL_SHAPE)[0]
+            if unit != 0.0:
+                inc = (m1.g[coarse[k]] - g0) / unit * side * G._integrate(ctx.path, xe, edge, side, S.A, None,
+                                                                          G.ARRIVAL_SHAPE)
+        out[arrived] = inc
+        return out
+
+    def _edge(self, window, status, q, qmax, state, loads1, ctx, side):
+        """The window's outermost stick point on its side (None: no stick cell)."""
+        G, S = self.G, self.solver
+        N1, hf, xf, nf = ctx.N1, window["h"], window["x"], window["x"].size
         stuck = np.flatnonzero(status == 0)
         if stuck.size == 0:
-            return window, None
+            return None
         drives = G._edge_drives(N1, state.loads, loads1)
         slipping = G._slipping_edges(drives, state.loads, loads1, S.f)
         drives = tuple((u / S.f, v) for u, v in drives) if any(slipping) else None
@@ -211,7 +229,7 @@ class Windows:
             i, k = i + 1, k + 1
         left, right, _ = G._run_edges(xs, qs, caps, st.astype(np.int8), N1, hf, i, k,
                                       (slipping[0], False) if side < 0 else (False, slipping[1]), drives)
-        return window, (left if side < 0 else right)
+        return left if side < 0 else right
 
 
 @numba.njit(cache=True)
@@ -412,22 +430,8 @@ class FastWindows(Windows):
         # the old state's lattice cells under its windows left out, its windows' own shear put in
         lock = self._field(mem0, state.loads, tabs, span, tf, j0, nf, old, [w["coarse_range"] for w in old])
         xf = (j0 + np.arange(nf) + 0.5) * hf
-        arrived = ~((xf > N0.left) & (xf < N0.right))
         coarse = np.arange(lo, hi)
-        if np.any(arrived):
-            edge = N0.left if side < 0 else N0.right
-            xe = xf[arrived]
-            inc = side * G._integrate(ctx.path, xe, edge, side, S.A, None)
-            xc = m1.x[coarse]
-            stuck = ((xc < N0.left) | (xc > N0.right)) & (np.asarray(m1.status)[coarse] == 0)
-            if fine.regime == G.Regime.PARTIAL_SLIP and np.any(stuck):
-                k = np.flatnonzero(stuck)[0 if side < 0 else -1]
-                g0 = S._displacement(mem0.shift, mem0.x, mem0.q, mem0.spacing, state.loads.sigma, xc[k:k + 1], N0)[0]
-                unit = side * G._integrate(ctx.path, xc[k:k + 1], edge, side, S.A, None, G.ARRIVAL_SHAPE)[0]
-                if unit != 0.0:
-                    inc = (m1.g[coarse[k]] - g0) / unit * side * G._integrate(ctx.path, xe, edge, side, S.A, None,
-                                                                              G.ARRIVAL_SHAPE)
-            lock[arrived] += inc
+        lock += self._arrivals(state, ctx, fine, side, xf, coarse)
         force = h * float(np.sum(np.asarray(m1.q)[lo:hi]))
         cidx = np.clip(np.arange(j0, j1 + 1) // R - (m1.first + lo), 0, WC - 1)
         status = np.asarray(m1.status)[lo:hi][cidx].astype(np.int8)
@@ -440,30 +444,6 @@ class FastWindows(Windows):
             self.failed += 1
             return window, None
         return window, self._edge(window, status, q, qmax, state, loads1, ctx, side)
-
-    def _edge(self, window, status, q, qmax, state, loads1, ctx, side):
-        """The window's outermost stick point on its side (None: no stick cell)."""
-        G, S = self.G, self.solver
-        N1, hf, xf, nf = ctx.N1, window["h"], window["x"], window["x"].size
-        stuck = np.flatnonzero(status == 0)
-        if stuck.size == 0:
-            return None
-        drives = G._edge_drives(N1, state.loads, loads1)
-        slipping = G._slipping_edges(drives, state.loads, loads1, S.f)
-        drives = tuple((u / S.f, v) for u, v in drives) if any(slipping) else None
-        i = k = stuck[0] if side < 0 else stuck[-1]
-        while side < 0 and k + 1 < nf and status[k + 1] == 0:
-            k += 1
-        while side > 0 and i > 0 and status[i - 1] == 0:
-            i -= 1
-        pad = nf if side < 0 else 0
-        xs = np.insert(xf, pad, xf[-1] + hf if side < 0 else xf[0] - hf)
-        qs, caps, st = np.insert(q, pad, 0.0), np.insert(qmax, pad, qmax[-1 if side < 0 else 0]), np.insert(status, pad, 1)
-        if side > 0:
-            i, k = i + 1, k + 1
-        left, right, _ = G._run_edges(xs, qs, caps, st.astype(np.int8), N1, hf, i, k,
-                                      (slipping[0], False) if side < 0 else (False, slipping[1]), drives)
-        return left if side < 0 else right
 
 
 def random_run(geometry, seed, nodes, refine, cells, offset=False, kind=None):
