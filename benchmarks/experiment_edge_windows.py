@@ -17,7 +17,8 @@ again on a lattice ``--refine`` times finer, on their own (a sub-model):
 * locks: each fine cell's displacement at the step's start from the composite state (the lattice's shear and
   shift outside the last window, the window's own fine shear inside it: the window keeps its history; its
   offset c is not kept, so its stuck cells follow the lattice's shift between takes: with ``--keep-offset``
-  they keep it, 8.1e-5 against 8.6e-5 on the punch below but 1.1e-4 against 4.1e-5 on the dovetail);
+  they keep it, 8.1e-5 against 8.6e-5 on the punch below but 1.1e-4 against 4.1e-5 on the dovetail, against
+  8000 nodes);
   cells that arrive in the step take M1's increments (GeneralSolver._arrivals) or, where the lattice's take
   slipped in part and sized its arrivals (_arrival_fit), the shape with the lattice's size there;
 * the active set on the dense window (a pattern repeated or 60 iterations: counted as not converged, and
@@ -28,7 +29,8 @@ again on a lattice ``--refine`` times finer, on their own (a sub-model):
 What it measured (2026-11-28, issue 14's note; docs/general_solver.md): the rounded punch's random
 histories at 512 nodes, 95th percentile of the vouched edges 2.7e-4 -> 8e-5 (the lattice at 1024 nodes:
 7.9e-5, at 2048: 5.7e-5); Hertz unchanged (its 95th percentile is set inside the contact); the dovetail's
-last cycle against 8000 nodes, 95th percentile 2.1e-4 -> 4e-5 at 1000 nodes. Without the window's own
+last cycle against 16000 nodes, 95th percentile 2.1e-4 -> 5.9e-5 at 1000 nodes, largest 3.4e-3 -> 1.3e-4 (the
+load maximum's ill-conditioned band, where the lattice is 12.4 um off up to 8000 nodes). Without the window's own
 history (locks from the lattice's state at every take, its displacement or its cell-centre values
 interpolated) it is worse than the lattice alone (5.5e-4 / 3.7e-4 at 512 nodes); with the window's rigid
 offset fixed to the lattice's shift (no force condition) its history drifts from the lattice's (4.5e-3).
@@ -508,15 +510,15 @@ def main(argv=None):
     ap.add_argument("--refine", type=int, default=4)
     ap.add_argument("--cells", type=int, default=16, help="lattice cells per window")
     ap.add_argument("--dovetail", type=int, nargs="*", default=[1000, 2000], help="nodes (against --dovetail-reference)")
-    ap.add_argument("--dovetail-reference", type=int, default=8000)
+    ap.add_argument("--dovetail-reference", type=int, default=16000)
     ap.add_argument("--keep-offset", action="store_true",
                     help="the window's rigid offset stays with its stuck cells (default: their locks follow the lattice's shift)")
     ap.add_argument("--no-doc", action="store_true")
     args = ap.parse_args(argv)
     ref = np.load(REFERENCE)
     random_rows, dovetail_rows = [], []
-    for g in args.geometries:
-        random_run(g, 0, 64, 1, args.cells)  # numba loads its compiled functions at their first call
+    for g in args.geometries:  # numba compiles or loads its functions at their first call: not in a timed run
+        random_run(g, 0, 4 * args.cells, args.refine, args.cells)
     for nodes in args.nodes:
         for g in args.geometries:
             for refine in (1, args.refine):
