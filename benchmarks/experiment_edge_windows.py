@@ -133,7 +133,8 @@ class Windows:
         xf = (np.arange(j0, j1 + 1) + 0.5) * hf
         nf = xf.size
         first_all, n_all = G._cells(N1.left, N1.right, hf)
-        cap = G._Load(N1, hf, S._kinks, S._graded_kinks).capacity(first_all, n_all, hf)[j0 - first_all:j1 - first_all + 1]
+        cap = G._Load(N1, hf, S._kinks, S._graded_kinks).capacity(first_all, n_all, hf)
+        cap = cap[j0 - first_all:j1 - first_all + 1]
         qmax = S.f * cap
         outside = np.array(m1.q, dtype=float)
         outside[coarse] = 0.0
@@ -226,7 +227,8 @@ class Windows:
             i -= 1
         pad = nf if side < 0 else 0
         xs = np.insert(xf, pad, xf[-1] + hf if side < 0 else xf[0] - hf)
-        qs, caps, st = np.insert(q, pad, 0.0), np.insert(qmax, pad, qmax[-1 if side < 0 else 0]), np.insert(status, pad, 1)
+        qs, st = np.insert(q, pad, 0.0), np.insert(status, pad, 1)
+        caps = np.insert(qmax, pad, qmax[-1 if side < 0 else 0])
         if side > 0:
             i, k = i + 1, k + 1
         left, right, _ = G._run_edges(xs, qs, caps, st.astype(np.int8), N1, hf, i, k,
@@ -509,10 +511,12 @@ def main(argv=None):
     ap.add_argument("--geometries", nargs="+", default=["punch", "hertz"])
     ap.add_argument("--refine", type=int, default=4)
     ap.add_argument("--cells", type=int, default=16, help="lattice cells per window")
-    ap.add_argument("--dovetail", type=int, nargs="*", default=[1000, 2000], help="nodes (against --dovetail-reference)")
+    ap.add_argument("--dovetail", type=int, nargs="*", default=[1000, 2000],
+                    help="nodes (against --dovetail-reference)")
     ap.add_argument("--dovetail-reference", type=int, default=16000)
     ap.add_argument("--keep-offset", action="store_true",
-                    help="the window's rigid offset stays with its stuck cells (default: their locks follow the lattice's shift)")
+                    help="the window's rigid offset stays with its stuck cells (default: their locks follow the "
+                         "lattice's shift)")
     ap.add_argument("--no-doc", action="store_true")
     args = ap.parse_args(argv)
     ref = np.load(REFERENCE)
@@ -531,7 +535,8 @@ def main(argv=None):
                     failed, solved = failed + run["failed"], solved + run["solved"]
                     wall, steps = wall + run["wall"], steps + run["steps"]
                 v, e = np.concatenate(vouched), np.concatenate(every)
-                random_rows.append((g, nodes, _windows(refine, args.cells), np.median(v), np.percentile(v, 95), np.percentile(e, 95), e.max(),
+                random_rows.append((g, nodes, _windows(refine, args.cells), np.median(v), np.percentile(v, 95),
+                                    np.percentile(e, 95), e.max(),
                                     failed, solved, 1e3 * wall / steps))
                 print(_random_row(random_rows[-1]), flush=True)
     if args.dovetail:
@@ -540,7 +545,8 @@ def main(argv=None):
             for refine in (1, args.refine):
                 edges, _, wall, failed, solved = dovetail_run(nodes, refine, args.cells, args.keep_offset)
                 err = np.abs(edges - reference) / width
-                dovetail_rows.append((nodes, _windows(refine, args.cells), np.nanmedian(err), np.nanpercentile(err, 95), np.nanmax(err),
+                dovetail_rows.append((nodes, _windows(refine, args.cells), np.nanmedian(err),
+                                      np.nanpercentile(err, 95), np.nanmax(err),
                                       failed, solved, 1e3 * wall))
                 print(_dovetail_row(dovetail_rows[-1]), flush=True)
     if not args.no_doc:

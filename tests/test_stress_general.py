@@ -921,8 +921,9 @@ def test_step_splitting_after_slip(kind, nodes, steps):
 
     Hertz does not meet the tolerance (an open defect of the lattice, AFTER_SLIP_SPLIT_BUG,
     kept as a recorded outcome). Measured at 6f1e27f (0.4.4): 1.8e-4 of the width at 128 nodes and 10
-    steps, 1.2e-4 at 512 nodes and 100 steps, one stick interval in every run (the islands below are
-    gone), the steps' estimates 4.3e-2 / 1.9e-3; the remaining difference is where in its cell the right
+    steps, 1.2e-4 at 512 nodes and 100 steps, one stick interval after 1, 10 and 100 steps at 128 nodes
+    (the islands below are gone), the steps' estimates 4.3e-2 / 1.9e-3; the remaining difference is where in
+    its cell the right
     edge falls (2e-2 of a 128-node cell), which a time step exact in time would remove, not finer
     sub-steps (benchmarks/time_convergence.py: the edges' error in time halves with the cell). Until
     0.3.8: the segment reverses slip at the right end while the right edge

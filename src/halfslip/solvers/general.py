@@ -454,7 +454,8 @@ class GeneralSolver(TangentialSolver):
                 # that asks for sub-steps, this is the step
                 if not fine.slipped or rough.slipped or (pieces := self._pieces(state, ctx, fine)) <= 1:
                     return self._finish(state, t1, loads1, ctx, fine, rough)[:2]
-                end = (fine.memory.first, fine.memory.status.copy())  # (writable, as _refined's: one compiled _toward_kernel)
+                # (a writable copy, as _refined's pattern: _toward_kernel is compiled once)
+                end = (fine.memory.first, fine.memory.status.copy())
         else:
             fine = self._take(state.memory, ctx.h, state.loads, loads1, ctx.N1, ctx.path, ctx.load)
             pieces = self._pieces(state, ctx, fine)
