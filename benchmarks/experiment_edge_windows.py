@@ -30,7 +30,8 @@ What it measured (2026-11-28, issue 14's note; docs/general_solver.md): the roun
 histories at 512 nodes, 95th percentile of the vouched edges 2.7e-4 -> 8e-5 (the lattice at 1024 nodes:
 7.9e-5, at 2048: 5.7e-5); Hertz unchanged (its 95th percentile is set inside the contact); the dovetail's
 last cycle against 16000 nodes, 95th percentile 2.1e-4 -> 5.9e-5 at 1000 nodes, largest 3.4e-3 -> 1.3e-4 (the
-load maximum's ill-conditioned band, where the lattice is 12.4 um off up to 8000 nodes). Without the window's own
+load maximum's ill-conditioned band, where the lattice is 12.4 um off up to 8000 nodes: by chance, windows of the
+same width at 2000 and 4000 nodes keep that step off). Without the window's own
 history (locks from the lattice's state at every take, its displacement or its cell-centre values
 interpolated) it is worse than the lattice alone (5.5e-4 / 3.7e-4 at 512 nodes); with the window's rigid
 offset fixed to the lattice's shift (no force condition) its history drifts from the lattice's (4.5e-3).
