@@ -59,7 +59,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
 from _doc import write_section  # noqa: E402
-from bench_general_random import DOC, REFERENCE, VOUCH, compare, machine, reference_error  # noqa: E402
+from bench_general_random import DOC, REFERENCE, VOUCH, compare, machine  # noqa: E402
 from random_histories import random_history  # noqa: E402
 
 BEGIN, END = "<!-- edge_windows: begin -->", "<!-- edge_windows: end -->"
@@ -238,9 +238,9 @@ class Windows:
 
 
 @numba.njit(cache=True)
-def _far_field(tabs, span, R, jf0, nf, first, q, lo, hi):  # pragma: no cover - compiled
+def _far_field(tabs, span, R, jf0, nf, first, q):  # pragma: no cover - compiled
     """sum_j t(x_i - x_j) q_j at the fine centres i (fine indices jf0 .. jf0 + nf - 1) over the lattice's cells
-    j (from lattice index ``first``) outside [lo, hi); ``tabs[m, span + k]`` = t(k h + (m + 1/2) h / R - h / 2)."""
+    j (from lattice index ``first``) carrying ``q``; ``tabs[m, span + k]`` = t(k h + (m + 1/2) h / R - h / 2)."""
     out = np.zeros(nf)
     for i in range(nf):
         jf = jf0 + i
@@ -248,8 +248,6 @@ def _far_field(tabs, span, R, jf0, nf, first, q, lo, hi):  # pragma: no cover - 
         m = jf - c * R
         total = 0.0
         for j in range(q.size):
-            if lo <= j < hi:
-                continue
             total += tabs[m, span + c - first - j] * q[j]
         out[i] = total
     return out
@@ -403,17 +401,18 @@ class FastWindows(Windows):
         q = np.array(mem.q, dtype=float)
         for lo, hi in exclude:
             q[lo:hi] = 0.0
-        out = mem.shift + 0.25 * S.A * loads.sigma * xs - _far_field(tabs, span, R, jf0, nf, mem.first, q, 0, 0)
+        out = mem.shift + 0.25 * S.A * loads.sigma * xs - _far_field(tabs, span, R, jf0, nf, mem.first, q)
         for w in windows:
             out -= _fine_products(tf, jf0, nf, w["first"], w["q"])
-        ends = [e for e in self.G._end_supports(mem.normal, mem.first, q.size, h) if q[e[0]] != 0.0]
+        ends = [e for e in self.G._end_supports(mem.normal, mem.first, q.size, h)
+                if not any(lo <= e[0] < hi for lo, hi in exclude)]
         if ends:
             C = S._end_columns(mem.normal, mem.first, h, ends, xs)
             out -= C @ q[[k for k, _, _ in ends]]
         return out
 
     def _window(self, state, loads1, ctx, fine, side):
-        S, G, R, WC = self.solver, self.G, self.refine, self.cells
+        S, R, WC = self.solver, self.refine, self.cells
         h, N1, m1, mem0 = ctx.h, ctx.N1, fine.memory, state.memory
         n, N0 = m1.q.size, mem0.normal
         if n < 2 * WC + 4 or N0 is None or mem0.spacing != h:
