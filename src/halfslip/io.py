@@ -247,10 +247,11 @@ def _record_kinds() -> dict:
     """The record kinds a checkpoint may hold: kind name -> class (dataclass or named tuple)."""
     from .geometry import NormalSolution, _ContactPressure
     from .solvers.exact import LevelMemory
+    from .solvers._windows import EdgeWindow
     from .solvers.general import GeneralMemory
     from .state import ContactState, Loads
 
-    classes = (ContactState, Loads, NormalSolution, _ContactPressure, LevelMemory, GeneralMemory)
+    classes = (ContactState, Loads, NormalSolution, _ContactPressure, LevelMemory, GeneralMemory, EdgeWindow)
     return {cls.__name__.lstrip("_"): cls for cls in classes}
 
 
@@ -358,11 +359,14 @@ def decode_tree(node, arrays: list, kinds: dict | None = None, depth: int = 0):
         if dc.is_dataclass(cls):
             fields = node.get("fields")
             names = [f.name for f in dc.fields(cls)]
-            if not isinstance(fields, dict) or sorted(fields) != sorted(names):
+            # a field added since the checkpoint was written (with a default: GeneralMemory.windows, 0.5.0)
+            defaults = {f.name: f.default for f in dc.fields(cls) if f.default is not dc.MISSING}
+            if not (isinstance(fields, dict) and set(fields) <= set(names) and set(names) - set(fields) <= set(defaults)):
                 raise CheckpointError(f"a {node['record']} record of the checkpoint has other fields than {names}")
             obj = object.__new__(cls)
             for name in names:
-                object.__setattr__(obj, name, decode_tree(fields[name], arrays, kinds, inner))
+                value = decode_tree(fields[name], arrays, kinds, inner) if name in fields else defaults[name]
+                object.__setattr__(obj, name, value)
             return obj
         items = node.get("items")
         if not isinstance(items, list) or len(items) != len(cls._fields):

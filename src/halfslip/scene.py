@@ -52,7 +52,7 @@ GEOMETRY_KINDS = ("hertz", "rounded_punch", "profile")
 
 _SCENE_KEYS = ("name", "material", "friction", "geometry", "loads", "solver", "output")
 _REQUIRED_KEYS = ("material", "friction", "geometry", "loads")
-_SOLVER_KEYS = ("method", "tol", "nodes", "skip_steady_cycles", "edge_travel")
+_SOLVER_KEYS = ("method", "tol", "nodes", "skip_steady_cycles", "edge_travel", "edge_windows")
 
 #: The general solver's stick edges are within about this many cells (contact width / nodes) of the
 #: converged ones (random histories, docs/general_solver.md; the median until 0.3.6, the 95th percentile over
@@ -84,6 +84,10 @@ class SolverOptions:
         Accuracy asked of the general solver: its stick edges, in units of the
         contact width (default 1e-4). It sets ``nodes`` when ``nodes`` is not
         given: nodes = ceil(NODES_PER_TOL / tol).
+    edge_windows : bool
+        Solve the first and last cells of the contact again on cells four
+        times finer at every take of the general solver, for its outermost
+        stick points (halfslip.solvers._windows; default false).
     """
 
     method: str = "auto"
@@ -91,6 +95,7 @@ class SolverOptions:
     skip_steady_cycles: bool = True
     edge_travel: float | None = None
     tol: float = 1e-4
+    edge_windows: bool = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "method", check_choice(self.method, "solver.method", METHODS))
@@ -102,6 +107,7 @@ class SolverOptions:
             object.__setattr__(self, "nodes", max(8, math.ceil(NODES_PER_TOL / self.tol)))
         object.__setattr__(self, "nodes", check_count(self.nodes, "solver.nodes", minimum=8))
         check_bool(self.skip_steady_cycles, "solver.skip_steady_cycles")
+        check_bool(self.edge_windows, "solver.edge_windows")
         if self.edge_travel is not None:
             object.__setattr__(self, "edge_travel", check_number(self.edge_travel, "solver.edge_travel",
                                                                  positive=True))

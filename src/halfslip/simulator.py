@@ -183,7 +183,7 @@ def build_method(scene, name: str, problem: NormalProblem, stations: np.ndarray 
 
     return GeneralSolver(problem, scene.friction, scene.solver.nodes, stations=stations,
                          width=reference_width(scene, problem, edges), travel=scene.solver.edge_travel,
-                         normals=None if edges is None else edges.solutions)
+                         normals=None if edges is None else edges.solutions, edge_windows=scene.solver.edge_windows)
 
 
 def reference_width(scene, problem: NormalProblem, edges: ContactEdges | None = None) -> float | None:

@@ -288,6 +288,9 @@ class GeneralMemory:
         Error estimate of the stick edges, relative to the contact width (NaN without the shadow).
     coarse : GeneralMemory or None
         The shadow lattice's memory (half the resolution) for the error estimate.
+    windows : tuple of EdgeWindow
+        The fine windows at the contact edges after the take that ended here (``edge_windows``;
+        :mod:`halfslip.solvers._windows`): their own shear, the history of the next take's windows.
     """
 
     normal: NormalSolution | None
@@ -301,6 +304,7 @@ class GeneralMemory:
     shift: float = 0.0
     error: float = math.nan
     coarse: "GeneralMemory | None" = None
+    windows: tuple = ()
 
     @property
     def x(self) -> np.ndarray:
@@ -373,6 +377,10 @@ class GeneralSolver(TangentialSolver):
         takes it instead of solving again (the dovetail: 591 -> 141 normal
         solves, 132 of them at start-up). They agree with the step's own
         warm-started solve to the normal solver's tolerance.
+    edge_windows : bool
+        After every fine take, solve the contact's first and last cells again
+        on fine windows (:mod:`halfslip.solvers._windows`) for the outermost
+        stick points; the state carries the windows' shear as their history.
 
     Attributes
     ----------
@@ -387,7 +395,8 @@ class GeneralSolver(TangentialSolver):
 
     def __init__(self, problem: NormalProblem, friction: float, nodes: int = DEFAULT_NODES, stations=None,
                  width: float | None = None, estimate: bool = True, travel: float | None = None,
-                 stick_travel: float | None = None, arrivals: bool = True, normals: dict | None = None):
+                 stick_travel: float | None = None, arrivals: bool = True, normals: dict | None = None,
+                 edge_windows: bool = False):
         self.problem = problem
         self._normals = {} if normals is None else normals
         self.f = float(friction)
@@ -411,6 +420,11 @@ class GeneralSolver(TangentialSolver):
         if not (math.isfinite(self.travel) and self.travel >= 0.0):
             raise ValueError(f"travel must be >= 0, got {travel!r}")
         self._lattices: dict[float, ToeplitzLattice] = {}
+        self.windows = None
+        if edge_windows:
+            from ._windows import EdgeWindows
+
+            self.windows = EdgeWindows(self)
         self._kinks, self._graded_kinks = _slope_kinks(problem.profile)
         self._end_cells = _Kept(END_CELLS_KEPT)
         self._loads = _Kept(LOADS_KEPT)
@@ -637,10 +651,17 @@ class GeneralSolver(TangentialSolver):
             reach = max(fine.placement * h, _unresolved_reach(fine.slipping, fine.memory.status, h))
             if reach > 0.0:
                 error = max(error if math.isfinite(error) else 0.0, reach / W)
+        windows, edges = (), fine.stick
+        if self.windows is not None and fine.regime in (Regime.PARTIAL_SLIP, Regime.STICK):
+            windows, edges = self.windows.solve(state, loads1, ctx, fine)
+            # a window's edge far from the lattice's must not look right: the estimate covers their distance
+            apart = max((abs(u - v) for u, v in zip(edges, fine.stick) if math.isfinite(u - v)), default=0.0) / W
+            if apart > 0.0:
+                error = max(error if math.isfinite(error) else 0.0, apart)
         m = fine.memory  # (dataclasses.replace, which took 10 us of a take)
         memory = GeneralMemory(m.normal, m.spacing, m.first, m.status, m.q, m.g, m.G, m.capacity, m.shift, error,
-                               coarse)
-        new = ContactState(float(t1), loads1, N1.left, N1.right, fine.stick[0], fine.stick[1], fine.shift,
+                               coarse, windows)
+        new = ContactState(float(t1), loads1, N1.left, N1.right, edges[0], edges[1], fine.shift,
                            state.dissipation + fine.dissipation, memory)
         converged = fine.residual <= 1.0
         message = fine.message
@@ -1177,6 +1198,15 @@ class GeneralSolver(TangentialSolver):
             return math.inf
         qs = self.f * max(float(ma.capacity.max()), float(mb.capacity.max()))
         dq = float(np.max(np.abs(ma.q - mb.q))) / qs
+        if ma.windows or mb.windows:
+            from ._windows import same_windows
+
+            # the windows on the same cells; not their shear: they are the lattice's output (one-way coupled),
+            # a steady lattice drives them to a steady state only slowly (the dovetail: their shear creeps by
+            # 4e-6 of f max p a cycle, their edges by 8e-6 of a cell), and the cycle check (cycles.py) holds
+            # their edges, which the windows are for, to 1e-3 of a cell at every step of the cycle
+            if not same_windows(ma.windows, mb.windows):
+                return math.inf
         # displacement scale: what f max p over the contact width moves a surface point by
         gs = self.A * qs * (ma.normal.right - ma.normal.left)
         dg = float(np.max(np.abs((ma.g - mb.g) - (a.shift - b.shift)))) / gs

@@ -1,0 +1,365 @@
+"""Fine windows at the contact edges of the general solver (``edge_windows``; docs/general_solver.md).
+
+After every fine take of :class:`~halfslip.solvers.general.GeneralSolver` (a step or a sub-step), the first and
+the last :data:`WINDOW_CELLS` lattice cells of the contact are solved again on cells :data:`REFINE` times finer,
+on their own (a sub-model, one-way coupled to the lattice):
+
+* unknowns: the fine cells' shear (cells fixed in space, aligned with the lattice's) and a rigid offset c of
+  the window; bounds f x each fine cell's load (the pressure integrated over it; the end cell reaches to the
+  contact edge);
+* driven by the lattice's answer outside the window (its shear there, its rigid shift and the bulk term),
+  fixed; the window carries the force the lattice's cells carry there, so c is free and not kept;
+* locks: each fine cell's displacement at the take's start from the composite state (the lattice's shear
+  outside the windows the state carries, those windows' own fine shear inside them: the windows keep their
+  history, :attr:`GeneralMemory.windows`); cells that arrive in the take lock M1's increments, or, where the
+  lattice's take slipped in part and sized its arrivals, the arrivals' shape with the lattice's size there;
+* the active set on the dense window (:func:`_active_set`: a pattern repeated or :data:`WINDOW_ITERATIONS`
+  iterations: not converged, and that side keeps the lattice's edge);
+* its outermost stick point on its side, placed by the lattice's own rule (_run_edges) on the fine cells,
+  replaces the lattice's, unless it falls within :data:`BUFFER` lattice cells of the window's inner end (there
+  the window's cut-off boundary, not the contact, sets it).
+
+The windows change the reported outermost stick points only: the shear, slip, dissipation and station states
+stay the lattice's. Measured (benchmarks/bench_edge_windows.py, docs/benchmarks.md): the rounded punch's
+random histories at 512 nodes, 95th percentile of the vouched stick edges 2.7e-4 -> 8.6e-5 of the width; the
+dovetail at 1000 nodes against 16000, largest 3.4e-3 -> 1.3e-4. A window's edge far from the lattice's says
+so: the step's error estimate is at least their distance.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+
+#: Fine cells per lattice cell in a window.
+REFINE = 4
+#: Lattice cells a window spans at each contact edge (the first and last cells of the contact).
+WINDOW_CELLS = 16
+#: A window's stick edge within this many lattice cells of its inner end is left to the lattice: the window is
+#: cut off there (the lattice's shear held fixed beyond it), so an edge there is the cut's, not the contact's
+#: (tests/test_windows.py: without it the J1/J2 edges at 256 nodes come out worse than the lattice's).
+BUFFER = 4
+#: Active-set iterations at most for a window.
+WINDOW_ITERATIONS = 60
+
+
+@dataclass(frozen=True)
+class EdgeWindow:
+    """The fine shear of one window after a take.
+
+    Attributes
+    ----------
+    side : int
+        -1 at the left contact edge, +1 at the right one.
+    first : int
+        Fine index of its first cell (centres at (first + k + 1/2) spacing).
+    spacing : float
+        Fine cell width [m] (the lattice's / REFINE).
+    q : ndarray
+        Shear of each fine cell [Pa].
+    lo, hi : int
+        The memory's cells (lo .. hi - 1, as indices of its arrays) the window stands in for.
+    """
+
+    side: int
+    first: int
+    spacing: float
+    q: np.ndarray
+    lo: int
+    hi: int
+
+
+class EdgeWindows:
+    """The windows of one :class:`GeneralSolver`: kernel tables per lattice spacing and :meth:`solve`."""
+
+    def __init__(self, solver, refine: int = REFINE, cells: int = WINDOW_CELLS):
+        from . import general
+
+        self.G, self.solver, self.refine, self.cells = general, solver, int(refine), int(cells)
+        self._tables: dict = {}
+        self.solved = self.failed = 0
+
+    # -- one take ---------------------------------------------------------------------------------------------
+    def solve(self, state, loads1, ctx, fine) -> tuple[tuple, list]:
+        """The windows after the fine take ``fine`` from ``state`` (``ctx`` its _Context): (windows, edges) with
+        edges [left, right] the outermost stick points, the lattice's where a window has none of its own."""
+        windows, edges = [], [fine.stick[0], fine.stick[1]]
+        for s, side in enumerate((-1, 1)):
+            got = self._window(state, loads1, ctx, fine, side)
+            if got is not None:
+                window, edge = got
+                windows.append(window)
+                if edge is not None:
+                    edges[s] = edge
+        return tuple(windows), edges
+
+    def _window(self, state, loads1, ctx, fine, side):
+        """The window at the left (side -1) or right contact edge after the take ``fine``: (its EdgeWindow, its
+        outermost stick point or None), None where the contact is too small or new."""
+        S, R, WC = self.solver, self.refine, self.cells
+        h, N1, m1, mem0 = ctx.h, ctx.N1, fine.memory, state.memory
+        n, N0 = m1.q.size, mem0.normal
+        if n < 2 * WC + 4 or N0 is None or mem0.spacing != h:
+            return None
+        hf = h / R
+        if side < 0:
+            lo, hi = 0, WC
+            j0, j1 = math.ceil(N1.left / hf - 0.5), R * (m1.first + WC) - 1
+        else:
+            lo, hi = n - WC, n
+            j0, j1 = R * (m1.first + n - WC), math.floor(N1.right / hf - 0.5)
+        nf = j1 - j0 + 1
+        span = max(n, mem0.q.size) + abs(m1.first - mem0.first) + 2 * WC + 4
+        tabs, span, tf = self._kernel_tables(h, span)
+        qmax = S.f * self._loads(N1, hf, j0, j1)
+        gout = self._field(m1, loads1, tabs, span, tf, j0, nf, (), ((lo, hi),))
+        old = tuple(w for w in mem0.windows if w.spacing == hf)
+        lock = self._field(mem0, state.loads, tabs, span, tf, j0, nf, old, tuple((w.lo, w.hi) for w in old))
+        xf = (j0 + np.arange(nf) + 0.5) * hf
+        lock += self._arrivals(state, ctx, fine, side, xf, lo, hi)
+        force = h * float(np.sum(m1.q[lo:hi]))
+        cidx = np.clip(np.arange(j0, j1 + 1) // R - (m1.first + lo), 0, WC - 1)
+        status = m1.status[lo:hi][cidx].astype(np.int8)
+        qtol, stol = 1e-10 * float(np.max(qmax)), 1e-10 * S.A * float(np.max(qmax)) * hf
+        self.solved += 1
+        q, status, converged = _active_set(tf, gout, lock, qmax, force, hf, status, qtol, stol, WINDOW_ITERATIONS)
+        q.flags.writeable = False
+        window = EdgeWindow(side, j0, hf, q, lo, hi)
+        if not converged:
+            self.failed += 1
+            return window, None
+        edge = self._edge(xf, hf, status, q, qmax, state, loads1, ctx, side)
+        if edge is not None:
+            inner = (m1.first + hi) * h if side < 0 else (m1.first + lo) * h
+            if side * (inner - edge) > -BUFFER * h:  # within BUFFER cells of the inner end: the lattice's
+                edge = None
+        return window, edge
+
+    # -- the parts ------------------------------------------------------------------------------------------
+    def _kernel_tables(self, h, span):
+        """(tabs, span, tf): the lattice's kernel at the REFINE fine offsets within a cell over +- span cells
+        (``tabs[m, span + k]`` = t(k h + (m + 1/2) h / R - h / 2)), and the fine kernel over R (span + cells)
+        fine cells (package datum)."""
+        got = self._tables.get(h)
+        if got is None or got[1] < span:
+            from ._toeplitz import kernel
+
+            S, R = self.solver, self.refine
+            span = max(span, 2 * (got[1] if got else 0))
+            k = np.arange(-span, span + 1)
+            hf = h / R
+            tabs = np.array([kernel(k * h + (m + 0.5) * hf - 0.5 * h, h, S.datum, S.A) for m in range(R)])
+            tf = kernel(np.arange(R * (span + self.cells) + 2) * hf, hf, S.datum, S.A)
+            got = self._tables[h] = (tabs, span, tf)
+        return got
+
+    def _loads(self, N, hf, j0, j1):
+        """(1/hf) int p over the fine cells j0 .. j1, the one at a contact edge reaching to it (_Load's
+        quadrature over these cells only)."""
+        G, S = self.G, self.solver
+        L, R_, c, d = N.left, N.right, N.center, N.half_width
+        first, n = G._cells(L, R_, hf)
+        xa = L if j0 <= first else j0 * hf
+        xb = R_ if j1 >= first + n - 1 else (j1 + 1) * hf
+        inner = np.arange(j0 + 1, j1 + 1) * hf
+        inner = inner[(inner > L) & (inner < R_)]
+        kinks = S._kinks[(S._kinks > L) & (S._kinks < R_)]
+        extra = [kinks]
+        if S._graded_kinks and kinks.size:
+            step = min(hf, d) * 0.25 ** np.arange(1, G.KINK_GRADING + 1)
+            extra += [kinks[:, None] - step[None, :], kinks[:, None] + step[None, :], L + step, R_ - step]
+        extra = np.concatenate([e.ravel() for e in extra])
+        extra = extra[(extra > xa) & (extra < xb)]
+        pts = np.unique(np.concatenate((inner, extra)))
+        bounds = np.concatenate(([xa], pts, [xb]))
+        th = np.arccos(np.clip((c - bounds) / d, -1.0, 1.0))
+        near = np.zeros(bounds.size - 1, bool)
+        if extra.size:
+            at = np.searchsorted(bounds, extra)
+            near[at - 1] = near[np.minimum(at, bounds.size - 2)] = True
+        if xa == L:
+            near[:2] = True
+        if xb == R_:
+            near[-2:] = True
+        part = G._interval_loads(th[:-1], np.diff(th), near, c, d, G._GL_T, G._GL_W, G._KINK_T, G._KINK_W, G._FAR_T,
+                                 G._FAR_W, G.FAR_SPANS, N.pressure_arguments())
+        cum = np.concatenate(([0.0], np.cumsum(part)))
+        at = np.concatenate(([0], np.searchsorted(bounds, inner), [bounds.size - 1]))
+        return np.diff(cum[at]) / hf
+
+    def _field(self, mem, loads, tabs, span, tf, jf0, nf, windows, exclude):
+        """The displacement at the fine centres jf0 .. jf0 + nf - 1 of a state: its lattice shear outside the
+        ``exclude`` ranges of its cells, ``windows``' fine shear, its shift, bulk term and the end cells outside
+        those ranges."""
+        S, R = self.solver, self.refine
+        h = mem.spacing
+        xs = (jf0 + np.arange(nf) + 0.5) * (h / R)
+        q = np.array(mem.q, dtype=float)
+        for lo, hi in exclude:
+            q[lo:hi] = 0.0
+        out = mem.shift + 0.25 * S.A * loads.sigma * xs - _far_field(tabs, span, R, jf0, nf, mem.first, q)
+        for w in windows:
+            out -= _fine_products(tf, jf0, nf, w.first, w.q)
+        ends = [e for e in self.G._end_supports(mem.normal, mem.first, q.size, h)
+                if not any(lo <= e[0] < hi for lo, hi in exclude)]
+        if ends:
+            C = S._end_columns(mem.normal, mem.first, h, ends, xs)
+            out -= C @ q[[k for k, _, _ in ends]]
+        return out
+
+    def _arrivals(self, state, ctx, fine, side, xf, lo, hi):
+        """What the fine cells centred at ``xf`` that arrive in the take add to their locks (0 elsewhere): M1's
+        increments, or where the lattice's take slipped in part and has a stuck arrived cell among its cells
+        lo .. hi - 1 (those under the window), the arrivals' shape with the lattice's size there."""
+        S, G = self.solver, self.G
+        m1, mem0 = fine.memory, state.memory
+        N0 = mem0.normal
+        out = np.zeros(xf.size)
+        arrived = ~((xf > N0.left) & (xf < N0.right))
+        if not np.any(arrived):
+            return out
+        edge = N0.left if side < 0 else N0.right
+        xe = xf[arrived]
+        inc = side * G._integrate(ctx.path, xe, edge, side, S.A, None)
+        xc = m1.x[lo:hi]
+        stuck = ((xc < N0.left) | (xc > N0.right)) & (m1.status[lo:hi] == 0)
+        if fine.regime == G.Regime.PARTIAL_SLIP and np.any(stuck):
+            k = np.flatnonzero(stuck)[0 if side < 0 else -1]
+            g0 = S._displacement(mem0.shift, mem0.x, mem0.q, mem0.spacing, state.loads.sigma, xc[k:k + 1], N0)[0]
+            unit = side * G._integrate(ctx.path, xc[k:k + 1], edge, side, S.A, None, G.ARRIVAL_SHAPE)[0]
+            if unit != 0.0:
+                inc = (m1.g[lo + k] - g0) / unit * side * G._integrate(ctx.path, xe, edge, side, S.A, None,
+                                                                       G.ARRIVAL_SHAPE)
+        out[arrived] = inc
+        return out
+
+    def _edge(self, xf, hf, status, q, qmax, state, loads1, ctx, side):
+        """The window's outermost stick point on its side (None: no stick cell)."""
+        G, S = self.G, self.solver
+        N1, nf = ctx.N1, xf.size
+        stuck = np.flatnonzero(status == 0)
+        if stuck.size == 0:
+            return None
+        drives = G._edge_drives(N1, state.loads, loads1)
+        slipping = G._slipping_edges(drives, state.loads, loads1, S.f)
+        drives = tuple((u / S.f, v) for u, v in drives) if any(slipping) else None
+        # the stick run nearest the contact edge; the window's inner end is no contact edge: a slipping cell
+        # beyond it keeps _run_edges from reading it as one
+        i = k = stuck[0] if side < 0 else stuck[-1]
+        while side < 0 and k + 1 < nf and status[k + 1] == 0:
+            k += 1
+        while side > 0 and i > 0 and status[i - 1] == 0:
+            i -= 1
+        pad = nf if side < 0 else 0
+        xs = np.insert(xf, pad, xf[-1] + hf if side < 0 else xf[0] - hf)
+        qs, st = np.insert(q, pad, 0.0), np.insert(status, pad, 1)
+        caps = np.insert(qmax, pad, qmax[-1 if side < 0 else 0])
+        if side > 0:
+            i, k = i + 1, k + 1
+        left, right, _ = G._run_edges(xs, qs, caps, st.astype(np.int8), N1, hf, i, k,
+                                      (slipping[0], False) if side < 0 else (False, slipping[1]), drives)
+        return left if side < 0 else right
+
+
+def same_windows(a: tuple, b: tuple) -> bool:
+    """Whether two states' windows stand on the same fine cells."""
+    return len(a) == len(b) and all((u.side, u.first, u.spacing, u.q.size, u.lo, u.hi)
+                                    == (v.side, v.first, v.spacing, v.q.size, v.lo, v.hi) for u, v in zip(a, b))
+
+
+@numba.njit(cache=True)
+def _far_field(tabs, span, R, jf0, nf, first, q):  # pragma: no cover - compiled
+    """sum_j t(x_i - x_j) q_j at the fine centres i (fine indices jf0 .. jf0 + nf - 1) over the lattice's cells
+    j (from lattice index ``first``) carrying ``q``; ``tabs[m, span + k]`` = t(k h + (m + 1/2) h / R - h / 2)."""
+    out = np.zeros(nf)
+    for i in range(nf):
+        jf = jf0 + i
+        c = jf // R
+        m = jf - c * R
+        total = 0.0
+        for j in range(q.size):
+            total += tabs[m, span + c - first - j] * q[j]
+        out[i] = total
+    return out
+
+
+@numba.njit(cache=True)
+def _fine_products(tf, rows0, n_rows, cols0, q):  # pragma: no cover - compiled
+    """sum_j tf[|i - j|] q_j between fine cells (rows from fine index rows0, the shear's cells from cols0)."""
+    out = np.zeros(n_rows)
+    for i in range(n_rows):
+        total = 0.0
+        for j in range(q.size):
+            total += tf[abs(rows0 + i - cols0 - j)] * q[j]
+        out[i] = total
+    return out
+
+
+@numba.njit(cache=True)
+def _active_set(tf, gout, lock, qmax, force, hf, status, qtol, stol, max_iter):  # pragma: no cover - compiled
+    """The window's active set (dense): g = gout + c - T q with T[i, j] = tf[|i - j|]; stuck cells g = lock,
+    slipping ones q = s qmax with s (g - lock) >= 0; hf sum q = force, the offset c free. Returns q, the
+    pattern and whether it converged (a pattern repeated or max_iter iterations: not)."""
+    n = gout.size
+    status = status.copy()
+    seen = np.empty((max_iter, n), np.int8)
+    q = np.zeros(n)
+    c = 0.0
+    for it in range(max_iter):
+        k = 0
+        for i in range(n):
+            if status[i] == 0:
+                k += 1
+        idx = np.empty(k, np.int64)
+        k = 0
+        for i in range(n):
+            q[i] = 0.0 if status[i] == 0 else status[i] * qmax[i]
+            if status[i] == 0:
+                idx[k] = i
+                k += 1
+        if k > 0:
+            M = np.zeros((k + 1, k + 1))
+            b = np.empty(k + 1)
+            rest = force
+            for i in range(n):
+                rest -= hf * q[i]
+            for a in range(k):
+                i = idx[a]
+                acc = gout[i] - lock[i]
+                for j in range(n):
+                    if status[j] != 0:
+                        acc -= tf[abs(i - j)] * q[j]
+                b[a] = acc
+                for e in range(k):
+                    M[a, e] = tf[abs(i - idx[e])]
+                M[a, k] = -1.0
+                M[k, a] = hf
+            b[k] = rest
+            sol = np.linalg.solve(M, b)
+            for a in range(k):
+                q[idx[a]] = sol[a]
+            c = sol[k]
+        new = status.copy()
+        same = True
+        for i in range(n):
+            if status[i] == 0:
+                if abs(q[i]) > qmax[i] + qtol:
+                    new[i] = 1 if q[i] > 0 else -1
+                    same = False
+            else:
+                g = gout[i] + c - lock[i]
+                for j in range(n):
+                    g -= tf[abs(i - j)] * q[j]
+                if status[i] * g < -stol:
+                    new[i] = 0
+                    same = False
+        if same:
+            return q, status, True
+        for r in range(it):
+            if np.array_equal(seen[r], new):
+                return q, status, False
+        seen[it] = new
+        status = new
+    return q, status, False
