@@ -20,10 +20,12 @@ on their own (a sub-model, one-way coupled to the lattice):
   the window's cut-off boundary, not the contact, sets it).
 
 The windows change the reported outermost stick points only: the shear, slip, dissipation and station states
-stay the lattice's. Measured (benchmarks/bench_edge_windows.py, docs/benchmarks.md): the rounded punch's
-random histories at 512 nodes, 95th percentile of the vouched stick edges 2.7e-4 -> 8.6e-5 of the width; the
-dovetail at 1000 nodes against 16000, largest 3.4e-3 -> 1.3e-4. A window's edge far from the lattice's says
-so: the step's error estimate is at least their distance.
+stay the lattice's. Measured (2026-11-29, benchmarks/bench_edge_windows.py, docs/benchmarks.md): the rounded
+punch's random histories at 512 nodes, 95th percentile of the vouched stick edges 2.7e-4 -> 9.6e-5 of the width
+(Hertz 6.1e-5 -> 6.0e-5: set inside the contact), 2.5 -> 5.2 ms a step; the dovetail (every step marched) at
+1000 nodes against 16000, 95th percentile 2.1e-4 -> 6.1e-5, 0.51 -> 1.11 ms a step (its largest, 3.4e-3, is
+the load maximum's ill-conditioned band, which they leave as it is). A window's edge far from the lattice's
+says so: the step's error estimate is at least their distance.
 """
 from __future__ import annotations
 
@@ -156,13 +158,26 @@ class EdgeWindows:
         return got
 
     def _loads(self, N, hf, j0, j1):
-        """(1/hf) int p over the fine cells j0 .. j1, the one at a contact edge reaching to it (_Load's
-        quadrature over these cells only)."""
+        """(1/hf) int p over the fine cells j0 .. j1, the one at a contact edge reaching to it: _Load's closed form
+        (where its rounding passes _Load's test) or its quadrature, over these cells only."""
         G, S = self.G, self.solver
         L, R_, c, d = N.left, N.right, N.center, N.half_width
         first, n = G._cells(L, R_, hf)
-        xa = L if j0 <= first else j0 * hf
-        xb = R_ if j1 >= first + n - 1 else (j1 + 1) * hf
+        at_left, at_right = j0 <= first, j1 >= first + n - 1
+        limit = G.LOAD_ROUNDING * N.P * hf / (R_ - L)
+        inner, cum, _ = G._closed_form_loads(L, R_, hf, j0, j1 + 1, N.P, *N.pressure_arguments(), limit)
+        if cum.size:
+            ks = np.arange(j0, j1 + 2)
+            v = hf * ks  # (the closed form's own test of which points are inside)
+            F = np.full(ks.size, np.nan)
+            F[(v > L) & (v < R_)] = cum[1:-1]
+            if at_left:
+                F[0] = 0.0
+            if at_right:
+                F[-1] = N.P
+            return np.diff(F) / hf
+        xa = L if at_left else j0 * hf
+        xb = R_ if at_right else (j1 + 1) * hf
         inner = np.arange(j0 + 1, j1 + 1) * hf
         inner = inner[(inner > L) & (inner < R_)]
         kinks = S._kinks[(S._kinks > L) & (S._kinks < R_)]
@@ -252,13 +267,15 @@ class EdgeWindows:
             k += 1
         while side > 0 and i > 0 and status[i - 1] == 0:
             i -= 1
-        pad = nf if side < 0 else 0
-        xs = np.insert(xf, pad, xf[-1] + hf if side < 0 else xf[0] - hf)
-        qs, st = np.insert(q, pad, 0.0), np.insert(status, pad, 1)
-        caps = np.insert(qmax, pad, qmax[-1 if side < 0 else 0])
+        def pad(a, value):  # one slipping cell beyond the inner end
+            return np.concatenate((a, [value]) if side < 0 else ([value], a))
+
+        xs = pad(xf, xf[-1] + hf if side < 0 else xf[0] - hf)
+        qs, st = pad(q, 0.0), pad(status, 1).astype(np.int8)
+        caps = pad(qmax, qmax[-1 if side < 0 else 0])
         if side > 0:
             i, k = i + 1, k + 1
-        left, right, _ = G._run_edges(xs, qs, caps, st.astype(np.int8), N1, hf, i, k,
+        left, right, _ = G._run_edges(xs, qs, caps, st, N1, hf, i, k,
                                       (slipping[0], False) if side < 0 else (False, slipping[1]), drives)
         return left if side < 0 else right
 

@@ -1,0 +1,195 @@
+"""The general solver's fine windows at the contact edges (``edge_windows``, halfslip.solvers._windows) against
+the lattice alone, on the random histories and on the dovetail.
+
+    python benchmarks/bench_edge_windows.py                  # the tables in docs/benchmarks.md
+    python benchmarks/bench_edge_windows.py --nodes 512 --geometries punch --no-doc
+
+Random histories (seeds 0, 1): the outermost stick points against benchmarks/reference/random_reference.npz
+(bench_general_random.compare), with and without windows, and the time per step (GeneralSolver.step alone).
+The dovetail (examples/dovetail.yaml, every step marched): the last cycle's outermost stick points against the
+lattice at ``--dovetail-reference`` nodes. ``--cells`` and ``--refine`` override the windows' size
+(_windows.WINDOW_CELLS, REFINE) for a measurement.
+
+What the design measured before it was built (2026-11-28, then benchmarks/experiment_edge_windows.py): without
+the window's own history (locks from the lattice's state at every take) it is worse than the lattice alone
+(5.5e-4 / 3.7e-4 at 512 nodes against 2.7e-4); with the window's rigid offset fixed to the lattice's shift (no
+force condition) its history drifts from the lattice's (4.5e-3); with the offset kept by its stuck cells 8.1e-5
+against 8.6e-5 on the punch but 1.1e-4 against 4.1e-5 on the dovetail. Windows of the same width at 2000 and
+4000 nodes (32 and 64 cells) keep the dovetail's load maximum 3.0e-3 off (an ill-conditioned band, where the
+lattice is 12.4 um off up to 8000 nodes).
+"""
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+from _doc import write_section  # noqa: E402
+from bench_general_random import DOC, REFERENCE, VOUCH, compare, machine  # noqa: E402
+from random_histories import random_history  # noqa: E402
+
+from halfslip.solvers._windows import REFINE, WINDOW_CELLS  # noqa: E402
+
+BEGIN, END = "<!-- edge_windows: begin -->", "<!-- edge_windows: end -->"
+
+
+def _solver(problem, friction, nodes, width, refine, cells):
+    """A GeneralSolver with windows of ``cells`` lattice cells x ``refine`` (refine 1: none)."""
+    from halfslip.solvers._windows import EdgeWindows
+    from halfslip.solvers.general import GeneralSolver
+
+    solver = GeneralSolver(problem, friction, nodes, width=width, edge_windows=refine > 1)
+    if refine > 1 and (refine, cells) != (solver.windows.refine, solver.windows.cells):
+        solver.windows = EdgeWindows(solver, refine, cells)
+    return solver
+
+
+def _counts(solver):
+    return (0, 0) if solver.windows is None else (solver.windows.failed, solver.windows.solved)
+
+
+def random_run(geometry, seed, nodes, refine, cells):
+    """One random history with (refine > 1) or without windows: per-step records for compare()."""
+    from halfslip.simulator import reference_width
+    from halfslip.state import Loads
+
+    info = {}
+    scene, t, P, Q, M, S = random_history(seed, geometry, info=info)
+    solver = _solver(info["problem"], info["friction"], nodes, reference_width(scene, info["problem"]), refine,
+                     cells)
+    state = solver.initial_state(t[0])
+    rec = {k: [] for k in ("stick_left", "stick_right", "contact_left", "contact_right", "dissipation", "intervals",
+                           "error")}
+    began = time.perf_counter()
+    for i in range(1, t.size):
+        state, report = solver.step(state, t[i], Loads(P[i], Q[i], M[i], S[i]))
+        for k, v in (("stick_left", state.stick_left), ("stick_right", state.stick_right),
+                     ("contact_left", state.contact_left), ("contact_right", state.contact_right),
+                     ("dissipation", state.dissipation), ("intervals", solver.stick_intervals(state)),
+                     ("error", report.error_estimate)):
+            rec[k].append(v)
+    wall = time.perf_counter() - began
+    out = {k: np.asarray(v, dtype=float) for k, v in rec.items()}
+    out["converged"] = np.ones(t.size - 1, bool)
+    out["wall"], out["steps"] = wall, t.size - 1
+    out["failed"], out["solved"] = _counts(solver)
+    return out
+
+
+def dovetail_run(nodes, refine, cells):
+    """examples/dovetail.yaml marched step by step (no cycle skipped): the outermost stick points of the last
+    cycle's steps, the contact width there, time per step, window solves not converged and window solves."""
+    import halfslip as hs
+    from halfslip.geometry import NormalProblem
+    from halfslip.simulator import reference_width
+    from halfslip.state import Loads
+
+    sc = hs.load_scene(HERE.parent / "examples" / "dovetail.yaml")
+    h = sc.history
+    problem = NormalProblem(sc.profile, sc.material.compliance)
+    solver = _solver(problem, sc.friction, nodes, reference_width(sc, problem), refine, cells)
+    state = solver.initial_state(h.t[0])
+    last = h.t >= h.t[-1] - 1.0 - 1e-12
+    edges = []
+    began = time.perf_counter()
+    for i in range(1, h.t.size):
+        state, _ = solver.step(state, h.t[i], Loads(h.P[i], h.Q[i], h.M[i], h.sigma[i]))
+        if last[i]:
+            edges.append((state.stick_left, state.stick_right))
+    wall = (time.perf_counter() - began) / (h.t.size - 1)
+    return (np.array(edges), state.contact_right - state.contact_left, wall) + _counts(solver)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--nodes", type=int, nargs="+", default=[512, 1024])
+    ap.add_argument("--geometries", nargs="+", default=["punch", "hertz"])
+    ap.add_argument("--refine", type=int, default=REFINE, help="fine cells per lattice cell")
+    ap.add_argument("--cells", type=int, default=WINDOW_CELLS, help="lattice cells per window")
+    ap.add_argument("--dovetail", type=int, nargs="*", default=[1000, 2000],
+                    help="nodes (against --dovetail-reference)")
+    ap.add_argument("--dovetail-reference", type=int, default=16000)
+    ap.add_argument("--no-doc", action="store_true")
+    args = ap.parse_args(argv)
+    ref = np.load(REFERENCE)
+    random_rows, dovetail_rows = [], []
+    for g in args.geometries:  # numba compiles or loads its functions at their first call: not in a timed run
+        random_run(g, 0, 4 * args.cells, args.refine, args.cells)
+    for nodes in args.nodes:
+        for g in args.geometries:
+            for refine in (1, args.refine):
+                vouched, every, failed, solved, wall, steps = [], [], 0, 0, 0.0, 0
+                for seed in (0, 1):
+                    run = random_run(g, seed, nodes, refine, args.cells)
+                    e, v, *_ = compare(run, ref, f"{g}_{seed}_")
+                    vouched.append(v)
+                    every.append(e)
+                    failed, solved = failed + run["failed"], solved + run["solved"]
+                    wall, steps = wall + run["wall"], steps + run["steps"]
+                v, e = np.concatenate(vouched), np.concatenate(every)
+                random_rows.append((g, nodes, _windows(refine, args.cells), np.median(v), np.percentile(v, 95),
+                                    np.percentile(e, 95), e.max(),
+                                    failed, solved, 1e3 * wall / steps))
+                print(_random_row(random_rows[-1]), flush=True)
+    if args.dovetail:
+        reference, width, *_ = dovetail_run(args.dovetail_reference, 1, args.cells)
+        for nodes in args.dovetail:
+            for refine in (1, args.refine):
+                edges, _, wall, failed, solved = dovetail_run(nodes, refine, args.cells)
+                err = np.abs(edges - reference) / width
+                dovetail_rows.append((nodes, _windows(refine, args.cells), np.nanmedian(err),
+                                      np.nanpercentile(err, 95), np.nanmax(err),
+                                      failed, solved, 1e3 * wall))
+                print(_dovetail_row(dovetail_rows[-1]), flush=True)
+    if not args.no_doc:
+        write_doc(random_rows, dovetail_rows, args, " ".join(sys.argv[1:] if argv is None else argv))
+
+
+def _windows(refine, cells):
+    return "-" if refine == 1 else f"{cells} cells x {refine}"
+
+
+def _random_row(r):
+    g, nodes, windows, med, p95, all95, top, failed, solved, ms = r
+    return (f"| {g} | {nodes} | {windows} | {med:.1e} | {p95:.1e} | {all95:.1e} | {top:.1e} | "
+            f"{failed} of {solved} | {ms:.2f} |")
+
+
+def _dovetail_row(r):
+    nodes, windows, med, p95, top, failed, solved, ms = r
+    return (f"| {nodes} | {windows} | {med:.1e} | {p95:.1e} | {top:.1e} | {failed} of {solved} | "
+            f"{ms:.2f} |")
+
+
+
+def write_doc(random_rows, dovetail_rows, args, argv):
+    text = (f"{BEGIN}\nMeasured with `python benchmarks/bench_edge_windows.py {argv}` on "
+            f"{time.strftime('%Y-%m-%d')}; machine: {machine()}. The general solver's outermost stick points with "
+            "its fine windows at the contact edges (`solver.edge_windows`, halfslip.solvers._windows: one-way "
+            "coupled to the lattice) against the lattice alone; ms / step: GeneralSolver.step alone, one pass.\n\n"
+            "Random histories (seeds 0, 1), stick edges against benchmarks/reference/random_reference.npz, relative to "
+            f"the contact width; vouched: the reference's own estimate at most {VOUCH:g}:\n\n"
+            "| geometry | nodes | windows | vouched: median | vouched: 95th pct | all: 95th pct | max | window solves "
+            "not converged | ms / step |\n|---|---:|---|---:|---:|---:|---:|---:|---:|\n"
+            + "\n".join(_random_row(r) for r in random_rows)
+            + (f"\n\nexamples/dovetail.yaml, every step marched, the last cycle's outermost stick points against the "
+               f"lattice at {args.dovetail_reference} nodes:\n\n| nodes | windows | median | 95th pct | max | window "
+               "solves not converged | ms / step |\n|---:|---|---:|---:|---:|---:|---:|\n"
+               + "\n".join(_dovetail_row(r) for r in dovetail_rows) if dovetail_rows else "")
+            + f"\n{END}")
+    write_section(DOC, BEGIN, END, text, "Fine windows at the contact edges (solver.edge_windows)")
+
+
+if __name__ == "__main__":
+    main()
