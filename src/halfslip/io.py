@@ -359,7 +359,7 @@ def decode_tree(node, arrays: list, kinds: dict | None = None, depth: int = 0):
         if dc.is_dataclass(cls):
             fields = node.get("fields")
             names = [f.name for f in dc.fields(cls)]
-            # a field added since the checkpoint was written (with a default: GeneralMemory.windows, 0.5.0)
+            # a field added since the checkpoint was written (with a default: GeneralMemory.windows, 0.4.5)
             defaults = {f.name: f.default for f in dc.fields(cls) if f.default is not dc.MISSING}
             if not (isinstance(fields, dict) and set(fields) <= set(names) and set(names) - set(fields) <= set(defaults)):
                 raise CheckpointError(f"a {node['record']} record of the checkpoint has other fields than {names}")
