@@ -19,8 +19,8 @@ on their own (a sub-model, one-way coupled to the lattice):
   replaces the lattice's, unless it falls within :data:`BUFFER` lattice cells of the window's inner end (there
   the window's cut-off boundary, not the contact, sets it).
 
-The windows change the reported outermost stick points only: the shear, slip, dissipation and station states
-stay the lattice's. Measured (2026-11-29, benchmarks/bench_edge_windows.py, docs/benchmarks.md): the rounded
+The windows change the reported outermost stick points and, at the stations on their cells, the shear and the
+station states (GeneralSolver.tractions, station_states); the slip and the dissipation stay the lattice's. Measured (2026-11-29, benchmarks/bench_edge_windows.py, docs/benchmarks.md): the rounded
 punch's random histories at 512 nodes, 95th percentile of the vouched stick edges 2.7e-4 -> 9.6e-5 of the width
 (Hertz 6.1e-5 -> 6.0e-5: set inside the contact), 2.5 -> 5.2 ms a step; the dovetail (every step marched) at
 1000 nodes against 16000, 95th percentile 2.1e-4 -> 6.1e-5, 0.51 -> 1.11 ms a step (its largest, 3.4e-3, is
@@ -60,7 +60,11 @@ class EdgeWindow:
     spacing : float
         Fine cell width [m] (the lattice's / REFINE).
     q : ndarray
-        Shear of each fine cell [Pa].
+        Shear of each fine cell [Pa] (its mean over the cell: spacing sum q is the force it carries).
+    capacity : ndarray
+        Mean pressure over each fine cell [Pa] (the end cell's over the cell reaching to the contact edge).
+    status : ndarray of int8
+        0 stuck, +1 / -1 slipping forward / backward in the take (unconverged: the last iterate's).
     lo, hi : int
         The memory's cells (lo .. hi - 1, as indices of its arrays) the window stands in for.
     """
@@ -69,8 +73,17 @@ class EdgeWindow:
     first: int
     spacing: float
     q: np.ndarray
+    capacity: np.ndarray
+    status: np.ndarray
     lo: int
     hi: int
+
+    def at(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(inside, j): which of the points ``x`` lie on the window's cells (its end cell reaching to the contact
+        edge, the points in contact there being the caller's) and the fine cell of each (clipped)."""
+        n = self.q.size
+        j = np.floor(x / self.spacing).astype(np.int64) - self.first
+        return (j < n if self.side < 0 else j >= 0), np.clip(j, 0, n - 1)
 
 
 class EdgeWindows:
@@ -127,8 +140,10 @@ class EdgeWindows:
         qtol, stol = 1e-10 * float(np.max(qmax)), 1e-10 * S.A * float(np.max(qmax)) * hf
         self.solved += 1
         q, status, converged = _active_set(tf, gout, lock, qmax, force, hf, status, qtol, stol, WINDOW_ITERATIONS)
-        q.flags.writeable = False
-        window = EdgeWindow(side, j0, hf, q, lo, hi)
+        cap = qmax / S.f
+        for a in (q, cap, status):
+            a.flags.writeable = False
+        window = EdgeWindow(side, j0, hf, q, cap, status, lo, hi)
         if not converged:
             self.failed += 1
             return window, None

@@ -1173,7 +1173,8 @@ class GeneralSolver(TangentialSolver):
         return zones
 
     def station_states(self, state: ContactState, x: np.ndarray, q: np.ndarray) -> np.ndarray:
-        """Out of contact / stick / forward / backward slip at surface points, from the cells."""
+        """Out of contact / stick / forward / backward slip at surface points, from the cells (the windows'
+        fine cells where the state has them)."""
         mem = state.memory
         x = np.asarray(x, dtype=float)
         codes = np.full(x.shape, OUT_OF_CONTACT, np.int8)
@@ -1182,6 +1183,9 @@ class GeneralSolver(TangentialSolver):
         inside = (x >= mem.normal.left) & (x <= mem.normal.right)
         j = np.clip(np.floor(x / mem.spacing).astype(np.int64) - mem.first, 0, mem.q.size - 1)
         st = mem.status[j]
+        for w in mem.windows:  # the fine windows' own, on their cells
+            on, k = w.at(x)
+            st = np.where(on, w.status[k], st)
         codes[inside & (st == 0)] = STICK
         codes[inside & (st > 0)] = FORWARD_SLIP
         codes[inside & (st < 0)] = BACKWARD_SLIP
@@ -1222,15 +1226,19 @@ class GeneralSolver(TangentialSolver):
 
     # -- output -------------------------------------------------------------------
     def tractions(self, memory: GeneralMemory, x) -> tuple[np.ndarray, np.ndarray]:
-        """Pressure p(x) and shear q(x) [Pa]: q = (q_j / cap_j) p within cell j (so |q| <= f p)."""
+        """Pressure p(x) and shear q(x) [Pa]: q = (q_j / cap_j) p within cell j (so |q| <= f p), within the fine
+        cells of the state's windows (``edge_windows``) where it has them."""
         x = np.asarray(x, dtype=float)
         if memory.normal is None:
             return np.zeros(x.shape), np.zeros(x.shape)
         p = memory.normal.pressure(x)
         j = np.clip(np.floor(x / memory.spacing).astype(np.int64) - memory.first, 0, memory.q.size - 1)
         with np.errstate(divide="ignore", invalid="ignore"):
-            chi = np.where(memory.capacity > 0.0, memory.q / memory.capacity, 0.0)
-        return p, chi[j] * p
+            chi = np.where(memory.capacity > 0.0, memory.q / memory.capacity, 0.0)[j]
+            for w in memory.windows:  # the fine windows' own shear on their cells (the force they carry is the
+                on, k = w.at(x)       # lattice's there)
+                chi = np.where(on, np.where(w.capacity > 0.0, w.q / w.capacity, 0.0)[k], chi)
+        return p, chi * p
 
     def shear_force(self, memory: GeneralMemory) -> float:
         """int q dx of the state [N/m]."""
