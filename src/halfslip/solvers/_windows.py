@@ -67,6 +67,9 @@ class EdgeWindow:
         0 stuck, +1 / -1 slipping forward / backward in the take (unconverged: the last iterate's).
     lo, hi : int
         The memory's cells (lo .. hi - 1, as indices of its arrays) the window stands in for.
+    lattice_edge : float
+        The lattice's own outermost stick point on this side after the take [m] (what the solver's step-size
+        control measures the travel of stick edges from: the windows leave the lattice as it is).
     """
 
     side: int
@@ -77,6 +80,7 @@ class EdgeWindow:
     status: np.ndarray
     lo: int
     hi: int
+    lattice_edge: float
 
     def at(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(inside, j): which of the points ``x`` lie on the window's cells (its end cell reaching to the contact
@@ -143,7 +147,7 @@ class EdgeWindows:
         cap = qmax / S.f
         for a in (q, cap, status):
             a.flags.writeable = False
-        window = EdgeWindow(side, j0, hf, q, cap, status, lo, hi)
+        window = EdgeWindow(side, j0, hf, q, cap, status, lo, hi, float(fine.stick[(side + 1) // 2]))
         if not converged:
             self.failed += 1
             return window, None

@@ -543,7 +543,11 @@ class GeneralSolver(TangentialSolver):
         moved = 1.0 if N0 is None else max(abs(N1.left - N0.left), abs(N1.right - N0.right)) / W
         pieces = math.ceil(moved / self.travel) if self.travel > 0.0 else 1
         if self.stick_travel > 0.0 and trial.regime == Regime.PARTIAL_SLIP and np.isfinite(state.stick_left):
-            travelled = max(abs(trial.stick[0] - state.stick_left), abs(trial.stick[1] - state.stick_right)) / W
+            # from the lattice's own edges (not the windows', which leave the lattice as it is)
+            old = [state.stick_left, state.stick_right]
+            for w in state.memory.windows:
+                old[(w.side + 1) // 2] = w.lattice_edge
+            travelled = max(abs(trial.stick[0] - old[0]), abs(trial.stick[1] - old[1])) / W
             pieces = max(pieces, math.ceil(travelled / self.stick_travel))
         pieces = min(MAX_SUBSTEPS, pieces)
         if self.arrivals and trial.regime == Regime.PARTIAL_SLIP and N0 is not None:
