@@ -265,7 +265,8 @@ def test_active_set_meets_its_optimality_conditions(planted):
         n = gout.size
         qtol, stol = 1e-10 * float(qmax.max()), 1e-10 * A * float(qmax.max()) * hf
         for start in (np.zeros(n, np.int8), rng.integers(-1, 2, n).astype(np.int8)):
-            q, status, converged = _active_set(tf, gout, lock, qmax, force, hf, start, qtol, stol, WINDOW_ITERATIONS)
+            q, c_said, status, converged = _active_set(tf, gout, lock, qmax, force, hf, start, qtol, stol,
+                                                       WINDOW_ITERATIONS)
             assert converged
             stuck = status == 0
             slip = ~stuck
@@ -273,6 +274,7 @@ def test_active_set_meets_its_optimality_conditions(planted):
             offsets = lock[stuck] - (gout - T @ q)[stuck]
             c = float(np.mean(offsets))
             assert float(np.ptp(offsets)) <= KKT_TOL * scale
+            assert abs(c_said - c) <= KKT_TOL * scale  # the offset it returns (the windows' slip uses it)
             g = gout + c - T @ q
             assert np.all(np.abs(q) <= qmax + qtol)
             assert np.all(np.abs(q[stuck]) <= qmax[stuck] + qtol)
@@ -285,7 +287,7 @@ def test_active_set_meets_its_optimality_conditions(planted):
                 assert float(np.max(np.abs(q - q0))) <= KKT_TOL * float(qmax.max())
                 assert abs(c - c0) <= KKT_TOL * scale
         if planted:
-            assert not _active_set(tf, gout, lock, qmax, force, hf, np.zeros(n, np.int8), qtol, stol, 1)[2]
+            assert not _active_set(tf, gout, lock, qmax, force, hf, np.zeros(n, np.int8), qtol, stol, 1)[3]
 
 
 # =============================================================================
@@ -348,8 +350,8 @@ RMS_GAIN = 2.0
 def test_j1_j2_edges_with_windows(kind, nodes):
     """J1 (Q to 0.6 f P at P0 in 30 steps) then J2 (back to -0.6 f P in 30) with and without windows.
 
-    The lattice is the same (status and shear of every cell bitwise, the dissipation equal): the windows change
-    the reported edges only. Every window converged. At every step the edges with windows are at most
+    The lattice is the same (status and shear of every cell bitwise): the windows do not change it (their
+    dissipation: test_windows_dissipation_against_the_exact_method). Every window converged. At every step the edges with windows are at most
     WORSE_CELLS cells worse than the lattice's; where the J1/J2 edge lies beyond the windows' reach (more than
     WINDOW_CELLS - BUFFER + 1 cells from the contact edge) they are the lattice's. On the punch, whose stick
     edges under J1 start at the contact edges, the steps within reach gain MEDIAN_GAIN in the median error and
@@ -369,7 +371,7 @@ def test_j1_j2_edges_with_windows(kind, nodes):
         m0, m1 = s0.memory, s1.memory
         # (the sub-steps too: test_windows_leave_the_lattices_sub_steps_alone)
         assert m0.first == m1.first and np.array_equal(m0.status, m1.status) and np.array_equal(m0.q, m1.q)
-        assert np.array_equal(m0.g, m1.g) and s0.dissipation == s1.dissipation
+        assert np.array_equal(m0.g, m1.g)
         c = j_exact(problem, i)
         h, W = m0.spacing, s0.contact_right - s0.contact_left
         e0, e1 = edge_error(s0, c), edge_error(s1, c)
@@ -554,42 +556,54 @@ def test_validate_prints_edge_windows(cli, tmp_path):
 # =============================================================================
 # 8, 9. a short dovetail end to end, and its resume
 # =============================================================================
-def dovetail_text(windows):
-    """examples/dovetail.yaml shortened: the ramp, then 6 cycles of 40 steps (its own 1000 nodes)."""
+def dovetail_text(windows, nodes=None):
+    """examples/dovetail.yaml shortened: the ramp, then 6 cycles of 40 steps (its own 1000 nodes unless
+    ``nodes``)."""
     return helpers.example_text("dovetail", **{
         "count: 20": "count: 6", "steps_per_cycle: 100": "steps_per_cycle: 40",
         "fields: [p, q, slip]": "fields: [p, q]",
-        "skip_steady_cycles: true": "skip_steady_cycles: true" + ("\n  edge_windows: true" if windows else "")})
+        "skip_steady_cycles: true": "skip_steady_cycles: true" + ("\n  edge_windows: true" if windows else "")
+        + (f"\n  nodes: {nodes}" if nodes else "")})
 
 
 @functools.lru_cache(maxsize=None)
-def dovetail(windows):
-    return hs.simulate(hs.parse_scene(dovetail_text(windows)))
+def dovetail(windows, nodes=None):
+    return hs.simulate(hs.parse_scene(dovetail_text(windows, nodes)))
 
 
 #: The lattice's outputs, which the windows leave as they are.
 LATTICE_VARIABLES = ("P", "Q", "M", "sigma", "contact_left", "contact_right", "regime", "rigid_shift", "converged",
                      "residual", "shear_error_estimate", "p")
-#: Dissipation with and without windows, relative (the lattice is the same: measured equal to the last bit).
-DISSIPATION_TOL = 1e-12
+#: The short dovetail's dissipation per cycle (its last) with windows at 1000 nodes against the lattice alone at
+#: 4000 nodes, relative: measured 185.602 against 185.679 uJ/m, 4.1e-4 (the lattice alone at 1000 nodes 186.096,
+#: 2.2e-3; 8000 nodes 185.748; the time steps set the rest: with 100 steps a cycle the windows give 185.796 and
+#: 4000 nodes 185.671, with 400 185.737 and 185.670). Before the windows' end cell carried the material that
+#: leaves the contact in a step, 185.144 (2.9e-3 low: its dissipation was lost, first order in the step).
+DOVETAIL_DISSIPATION_TOL = 1e-3
+#: ... and at least this many times closer to it than the lattice alone at 1000 nodes (measured 5.4x).
+DOVETAIL_DISSIPATION_GAIN = 2.0
 
 
 def test_dovetail_with_windows_end_to_end():
     """The short dovetail with solver.edge_windows: the general solver with windows ran it (windows in the last
-    state's memory), no step failed, steady cycles are still skipped, the dissipation (every step and the final
-    one) is the run's without windows (DISSIPATION_TOL) and so are the lattice's other outputs (bitwise) on the
-    steps both marched, and the stick edges differ from the lattice's by at most each step's error estimate
+    state's memory), no step failed, steady cycles are still skipped, the dissipation per cycle is within
+    DOVETAIL_DISSIPATION_TOL of the lattice's at 4000 nodes and DOVETAIL_DISSIPATION_GAIN times closer to it than
+    the lattice alone, the lattice's other outputs are the run's without windows (bitwise) on the steps both
+    marched, and the stick edges differ from the lattice's by at most each step's error estimate
     (measured: at 155 of 211 steps, by up to 2.9e-4 of the width, at most 0.55 of the estimate). The stored
     shear ``q`` and the station states are not compared: on the windows' cells they are the windows' (4fe595a)."""
     plain, ds = dovetail(False), dovetail(True)
     assert ds.attrs["method"] == "general" and ds.attrs["complete"] == 1
     assert ds.attrs["count_failed_steps"] == 0 and bool(np.all(ds["converged"].values == 1))
     assert ds.attrs["skipped_cycles"] > 0
-    assert float(ds["final_dissipation"]) == pytest.approx(float(plain["final_dissipation"]), rel=DISSIPATION_TOL)
+    per_cycle = [run.halfslip.dissipation_per_cycle()["dissipation"].values[-1]
+                 for run in (plain, ds, dovetail(False, 4000))]
+    lattice, windowed, fine = per_cycle
+    assert abs(windowed - fine) <= DOVETAIL_DISSIPATION_TOL * fine, per_cycle
+    assert abs(lattice - fine) >= DOVETAIL_DISSIPATION_GAIN * abs(windowed - fine), per_cycle
     common, i, j = np.intersect1d(plain["step"].values, ds["step"].values, return_indices=True)
     assert common.size > 150
     a, b = plain.isel(t=i), ds.isel(t=j)
-    np.testing.assert_allclose(b["dissipation"].values, a["dissipation"].values, rtol=DISSIPATION_TOL, atol=0.0)
     for name in LATTICE_VARIABLES:
         np.testing.assert_array_equal(b[name].values, a[name].values, err_msg=name)
     W = (b["contact_right"] - b["contact_left"]).values
@@ -634,7 +648,7 @@ def test_windows_leave_the_lattices_sub_steps_alone():
     punch took no sub-steps instead of two and dissipated 1.2e-3 less (found by the tests' author at 4fe595a;
     3 of 20 seeded random histories at 64 - 256 nodes differed in their sub-steps, dissipation up to 1.1e-3
     off). Checked: that step, and seeded random ramps (P, Q, M, sigma) on both profiles, where the lattice's
-    every cell, the sub-step count and the dissipation are the same bitwise with and without windows."""
+    every cell and the sub-step count are the same bitwise with and without windows."""
     problem = problem_of("punch")
     path = [(P0, 0.0), (P0, 0.1 * F * P0), (1.002 * P0, 0.3220667936149144 * F * P0)]
     runs = []
@@ -643,7 +657,7 @@ def test_windows_leave_the_lattices_sub_steps_alone():
         runs.append((march(solver, path), solver.counters["substeps"]))
     (plain, n0), (windowed, n1) = runs
     assert n0 == n1 == 2
-    assert windowed[-1][0].dissipation == plain[-1][0].dissipation
+    assert np.array_equal(windowed[-1][0].memory.q, plain[-1][0].memory.q)
     a = float(problem.half_width(P0))
     rng = np.random.default_rng(14)
     for kind in ("punch", "hertz"):
@@ -661,5 +675,81 @@ def test_windows_leave_the_lattices_sub_steps_alone():
             (plain, n0), (windowed, n1) = got
             assert n0 == n1
             for (s0, _), (s1, _) in zip(plain, windowed):
-                assert s0.dissipation == s1.dissipation
                 assert np.array_equal(s0.memory.q, s1.memory.q) and np.array_equal(s0.memory.status, s1.memory.status)
+
+
+#: The windows' dissipation against the exact method's (the rounded punch and Hertz are symmetric, M = sigma = 0:
+#: exact to rounding) on J_PATH, each step's increment where it is positive and the J1/J2 stick edge lies within
+#: the windows' reach (fewer than WINDOW_CELLS - BUFFER lattice cells from the contact edge): the median relative
+#: error with windows at least INCREMENT_MEDIAN_GAIN times below the lattice's, the rms INCREMENT_RMS_GAIN times.
+#: Measured (lattice -> windows): punch 256 nodes, 50 steps, median 3.4e-2 -> 3.1e-3 (11x), rms 2.3e-1 -> 2.3e-2;
+#: punch 512, 26 steps, 5.4e-3 -> 1.9e-3 (2.9x), rms 4.8e-2 -> 7.5e-3; Hertz 256, 16 steps, 1.7e-2 -> 2.0e-3,
+#: rms 6.4e-2 -> 6.6e-3; Hertz 512, 8 steps, 1.2e-2 -> 1.7e-3, rms 1.4e-2 -> 3.1e-3. Without the windows' own
+#: dissipation both are the lattice's (ratio 1). Single steps can be worse (punch 512: one step's 1e-4 against
+#: the lattice's lucky 2e-6), so the gain is asserted on the median and the rms.
+INCREMENT_MEDIAN_GAIN = 2.0
+INCREMENT_RMS_GAIN = 3.0
+
+
+@pytest.mark.parametrize("kind,nodes", [("punch", 256), ("punch", 512), ("hertz", 256), ("hertz", 512)])
+def test_windows_dissipation_against_the_exact_method(kind, nodes):
+    """The windows take the dissipation of the lattice cells they cover (their fine cells' f (cap0 + cap) / 2
+    |slip| hf, where their cells next to the cut are stuck): per step on J1/J2 against the exact method, within
+    their reach, INCREMENT_MEDIAN_GAIN / INCREMENT_RMS_GAIN better than the lattice alone; beyond their reach the
+    slip zone reaches the cut and the step's dissipation is the lattice's (to the rounding of the cumulative
+    sums, for the steps whose windows both fall back)."""
+    problem, exact = helpers.make(kind, "exact")
+    reference = march(exact, J_PATH)
+    lattice, _ = j_walk(kind, nodes, False)
+    windowed, _ = j_walk(kind, nodes, True)
+    a = float(problem.half_width(P0))
+    h = lattice[-1][0].memory.spacing
+    errors = []
+    for i in range(1, len(J_PATH)):
+        exact_step = reference[i][0].dissipation - reference[i - 1][0].dissipation
+        steps = [run[i][0].dissipation - run[i - 1][0].dissipation for run in (lattice, windowed)]
+        cells = (a - reference[i][0].stick_right) / h
+        if exact_step > 0.0 and cells < WINDOW_CELLS - BUFFER:
+            errors.append([abs(d - exact_step) / exact_step for d in steps])
+        if all(w.dissipation == 0.0 for w in windowed[i][0].memory.windows):  # (to the cumulative sums' rounding)
+            assert abs(steps[1] - steps[0]) <= 1e-12 * lattice[i][0].dissipation, f"step {i}"
+    e = np.array(errors)
+    assert len(e) >= 8
+    assert np.median(e[:, 0]) >= INCREMENT_MEDIAN_GAIN * np.median(e[:, 1]), np.median(e, axis=0)
+    assert np.sqrt(np.mean(e[:, 0] ** 2)) >= INCREMENT_RMS_GAIN * np.sqrt(np.mean(e[:, 1] ** 2))
+
+
+#: The slip accumulated at 4001 stations after a J1 ramp (Q to ``ratio`` f P0 in 10 steps at P0) against the
+#: exact method's, largest difference relative to the largest slip. Measured (lattice -> windows): punch 256
+#: nodes, 0.1: 3.0e-1 -> 4.6e-2; 512, 0.1: 1.3e-1 -> 3.1e-3; 512, 0.2: 6.6e-2 -> 8.5e-4; Hertz 256, 0.1: 1.0e-1 ->
+#: 1.4e-2 (the lattice interpolates its cells' slip linearly between their centres, and the slip zones here span
+#: 1.5 - 10 lattice cells). Where a slip zone reaches the windows' cut (Hertz at 512 nodes, 0.1: 13 cells) they
+#: fall back to the lattice's slip as it reads at their centres: the same error as the lattice's.
+SLIP_CASES = {("punch", 256, 0.1): 0.1, ("punch", 512, 0.1): 1e-2, ("punch", 512, 0.2): 5e-3,
+              ("hertz", 256, 0.1): 5e-2}
+#: ... and at least this many times below the lattice's (measured 6.5x .. 77x).
+SLIP_GAIN = 4.0
+
+
+@pytest.mark.parametrize("kind,nodes,ratio", list(SLIP_CASES))
+def test_windows_slip_at_the_stations_against_the_exact_method(kind, nodes, ratio):
+    """GeneralSolver.slip reads the windows' fine cells' accumulated slip on their cells (linear between their
+    centres, as the lattice's): after a J1 ramp within their reach, within SLIP_CASES of the exact method's slip
+    and SLIP_GAIN times closer to it than the lattice alone."""
+    problem, _ = helpers.make(kind, "exact")
+    a = float(problem.half_width(P0))
+    x = np.linspace(-a, a, 4001)
+    _, exact = helpers.make(kind, "exact", stations=x)
+    path = [(P0, 0.0)] + [(P0, r * F * P0) for r in np.linspace(0.0, ratio, 11)[1:]]
+    reference = exact.slip(march(exact, path)[-1][0].memory)
+    top = float(np.nanmax(np.abs(reference)))
+    errors = []
+    for windows in (False, True):
+        solver = GeneralSolver(problem, F, nodes, stations=x, edge_windows=windows)
+        got = solver.slip(march(solver, path)[-1][0].memory)
+        both = np.isfinite(got) & np.isfinite(reference)
+        assert both.sum() >= 3900
+        errors.append(float(np.max(np.abs(got[both] - reference[both]))) / top)
+    lattice, windowed = errors
+    assert windowed <= SLIP_CASES[(kind, nodes, ratio)], errors
+    assert lattice >= SLIP_GAIN * windowed, errors

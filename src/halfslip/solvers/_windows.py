@@ -65,11 +65,17 @@ class EdgeWindow:
         Mean pressure over each fine cell [Pa] (the end cell's over the cell reaching to the contact edge).
     status : ndarray of int8
         0 stuck, +1 / -1 slipping forward / backward in the take (unconverged: the last iterate's).
+    G : ndarray
+        Slip accumulated since each fine cell entered contact [m] (the lattice's of its cell until a window
+        first covered it).
     lo, hi : int
         The memory's cells (lo .. hi - 1, as indices of its arrays) the window stands in for.
     lattice_edge : float
         The lattice's own outermost stick point on this side after the take [m] (what the solver's step-size
         control measures the travel of stick edges from: the windows leave the lattice as it is).
+    dissipation : float
+        What the window changed the take's dissipation by [J/m]: its fine cells' f (cap0 + cap) / 2 |slip|
+        hf in place of the lattice's cells lo .. hi - 1 (0 where it did not converge).
     """
 
     side: int
@@ -78,9 +84,11 @@ class EdgeWindow:
     q: np.ndarray
     capacity: np.ndarray
     status: np.ndarray
+    G: np.ndarray
     lo: int
     hi: int
     lattice_edge: float
+    dissipation: float
 
     def at(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(inside, j): which of the points ``x`` lie on the window's cells (its end cell reaching to the contact
@@ -143,11 +151,37 @@ class EdgeWindows:
         status = m1.status[lo:hi][cidx].astype(np.int8)
         qtol, stol = 1e-10 * float(np.max(qmax)), 1e-10 * S.A * float(np.max(qmax)) * hf
         self.solved += 1
-        q, status, converged = _active_set(tf, gout, lock, qmax, force, hf, status, qtol, stol, WINDOW_ITERATIONS)
+        q, c, status, converged = _active_set(tf, gout, lock, qmax, force, hf, status, qtol, stol,
+                                              WINDOW_ITERATIONS)
         cap = qmax / S.f
-        for a in (q, cap, status):
+        # each fine cell's slip in the take (0 where stuck), its slip since it entered contact, and the dissipation
+        # it takes over from cells lo .. hi - 1
+        fine_index = j0 + np.arange(nf)
+        arrived = ~((xf > N0.left) & (xf < N0.right))
+        # the window's slip where the cut cannot set it: its cells within BUFFER lattice cells of the inner end stuck
+        cut = status[nf - BUFFER * R:] if side < 0 else status[:BUFFER * R]
+        if converged and not np.any(cut):
+            slip = np.where(status != 0, gout + c - _fine_products(tf, j0, nf, j0, q) - lock, 0.0)
+            same = [w for w in old if w.side == side and w.first == j0 and w.q.size == nf]
+            cap0 = same[0].capacity if same else self._start_loads(N0, hf, j0, j1, side, R * m1.first,
+                                                                    R * (m1.first + n) - 1)
+            moved = status != 0
+            spent = S.f * hf * float(np.sum(0.5 * (cap0[moved] + cap[moved]) * np.abs(slip[moved])))
+            moved = m1.status[lo:hi] != 0
+            spent -= S.f * h * float(np.sum(0.5 * (fine.cap0[lo:hi][moved] + m1.capacity[lo:hi][moved])
+                                            * np.abs(fine.slip[lo:hi][moved])))
+            G = np.zeros(nf)  # the slip before the take: the lattice's as it reads there, the old windows' own
+            G[~arrived] = np.interp(xf[~arrived], mem0.x, mem0.G)
+            for w in old:
+                k = fine_index - w.first
+                had = (k >= 0) & (k < w.q.size) & ~arrived
+                G[had] = w.G[k[had]]
+            G += slip
+        else:  # the lattice's: its dissipation, its slip as it reads at the fine centres
+            spent, G = 0.0, np.interp(xf, m1.x, m1.G)
+        for a in (q, cap, status, G):
             a.flags.writeable = False
-        window = EdgeWindow(side, j0, hf, q, cap, status, lo, hi, float(fine.stick[(side + 1) // 2]))
+        window = EdgeWindow(side, j0, hf, q, cap, status, G, lo, hi, float(fine.stick[(side + 1) // 2]), spent)
         if not converged:
             self.failed += 1
             return window, None
@@ -222,6 +256,31 @@ class EdgeWindows:
         cum = np.concatenate(([0.0], np.cumsum(part)))
         at = np.concatenate(([0], np.searchsorted(bounds, inner), [bounds.size - 1]))
         return np.diff(cum[at]) / hf
+
+    def _loads_over(self, N, hf, j0, j1):
+        """:meth:`_loads` of the fine cells j0 .. j1 under the contact ``N``, 0 on those outside it."""
+        first, n = self.G._cells(N.left, N.right, hf)
+        out = np.zeros(j1 - j0 + 1)
+        a, b = max(j0, first), min(j1, first + n - 1)
+        if a <= b:
+            out[a - j0:b - j0 + 1] = self._loads(N, hf, a, b)
+        return out
+
+    def _start_loads(self, N0, hf, j0, j1, side, lat0, lat1):
+        """The loads at the take's start (contact ``N0``) of the fine cells j0 .. j1, the end cell's reaching to
+        the old contact edge where the contact receded, but not beyond the lattice's cells at the end (fine
+        indices lat0 .. lat1): as the lattice's end cell, it carries the material that left in the take (whose
+        slip it has), the cells the lattice lost carry theirs (GeneralSolver._leaving)."""
+        first, n = self.G._cells(N0.left, N0.right, hf)
+        if side < 0:
+            a = min(j0, max(lat0, first))
+            loads = self._loads_over(N0, hf, a, j1)
+            loads[j0 - a] += float(np.sum(loads[:j0 - a]))
+            return loads[j0 - a:]
+        b = max(j1, min(lat1, first + n - 1))
+        loads = self._loads_over(N0, hf, j0, b)
+        loads[j1 - j0] += float(np.sum(loads[j1 - j0 + 1:]))
+        return loads[:j1 - j0 + 1]
 
     def _field(self, mem, loads, tabs, span, tf, jf0, nf, windows, exclude):
         """The displacement at the fine centres jf0 .. jf0 + nf - 1 of a state: its lattice shear outside the
@@ -336,7 +395,7 @@ def _fine_products(tf, rows0, n_rows, cols0, q):  # pragma: no cover - compiled
 @numba.njit(cache=True)
 def _active_set(tf, gout, lock, qmax, force, hf, status, qtol, stol, max_iter):  # pragma: no cover - compiled
     """The window's active set (dense): g = gout + c - T q with T[i, j] = tf[|i - j|]; stuck cells g = lock,
-    slipping ones q = s qmax with s (g - lock) >= 0; hf sum q = force, the offset c free. Returns q, the
+    slipping ones q = s qmax with s (g - lock) >= 0; hf sum q = force, the offset c free. Returns q, c, the
     pattern and whether it converged (a pattern repeated or max_iter iterations: not)."""
     n = gout.size
     status = status.copy()
@@ -392,10 +451,10 @@ def _active_set(tf, gout, lock, qmax, force, hf, status, qtol, stol, max_iter): 
                     new[i] = 0
                     same = False
         if same:
-            return q, status, True
+            return q, c, status, True
         for r in range(it):
             if np.array_equal(seen[r], new):
-                return q, status, False
+                return q, c, status, False
         seen[it] = new
         status = new
-    return q, status, False
+    return q, c, status, False

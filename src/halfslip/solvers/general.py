@@ -340,6 +340,8 @@ class _Outcome:
     message: str = ""
     slipping: tuple = (False, False)  # whether (S1) says the left / right contact edge slips in the step
     placement: float = 0.0  # how far, in cells, the placement rule puts the outermost / widest edges at most (_run_edges)
+    slip: np.ndarray | None = None  # each cell's slip in the take and its load at the take's start (the fine take's,
+    cap0: np.ndarray | None = None  # with edge_windows: the windows take the dissipation of the cells they cover)
 
 
 class GeneralSolver(TangentialSolver):
@@ -665,8 +667,9 @@ class GeneralSolver(TangentialSolver):
         m = fine.memory  # (dataclasses.replace, which took 10 us of a take)
         memory = GeneralMemory(m.normal, m.spacing, m.first, m.status, m.q, m.g, m.G, m.capacity, m.shift, error,
                                coarse, windows)
+        spent = fine.dissipation + sum(w.dissipation for w in windows)  # (the windows': in place of their cells')
         new = ContactState(float(t1), loads1, N1.left, N1.right, edges[0], edges[1], fine.shift,
-                           state.dissipation + fine.dissipation, memory)
+                           state.dissipation + spent, memory)
         converged = fine.residual <= 1.0
         message = fine.message
         if not converged:
@@ -816,8 +819,9 @@ class GeneralSolver(TangentialSolver):
             else:  # the estimate covers the widest interval too (its spread over sub-steps, _finish)
                 *widest, inner = _run_edges(x, q, qmax, status, N1, h, a, b - 1, slipping, drives)
                 widest, placement = tuple(widest), max(placement, inner)
+        kept = (s, cap0) if self.windows is not None and not shadow else (None, None)
         return _Outcome(memory, shift, dissipation, edges, widest, regime, slipped > 0, iterations, residual,
-                        message, slipping, placement)
+                        message, slipping, placement, *kept)
 
     def _active_set(self, lat: "_EndCellLattice", n: int, r: np.ndarray, qmax: np.ndarray, total: float,
                     status: np.ndarray, qtol: float, stol: float, fit=None):
@@ -1258,7 +1262,17 @@ class GeneralSolver(TangentialSolver):
         if memory.normal is None:
             return out
         inside = (self.stations >= memory.normal.left) & (self.stations <= memory.normal.right)
-        out[inside] = np.interp(self.stations[inside], memory.x, memory.G)
+        x, G = memory.x, memory.G
+        if memory.windows:  # the windows' fine cells in place of the lattice's they cover
+            keep = np.ones(x.size, bool)
+            for w in memory.windows:
+                keep[w.lo:w.hi] = False
+            parts = [(x[keep], G[keep])] + [((w.first + 0.5 + np.arange(w.q.size)) * w.spacing, w.G)
+                                            for w in memory.windows]
+            x = np.concatenate([p[0] for p in parts])
+            order = np.argsort(x, kind="stable")
+            x, G = x[order], np.concatenate([p[1] for p in parts])[order]
+        out[inside] = np.interp(self.stations[inside], x, G)
         return out
 
 
