@@ -38,18 +38,17 @@ from _doc import write_section  # noqa: E402
 from bench_general_random import DOC, REFERENCE, VOUCH, compare, machine  # noqa: E402
 from random_histories import random_history  # noqa: E402
 
-from halfslip.solvers._windows import REFINE, WINDOW_CELLS  # noqa: E402
 
 BEGIN, END = "<!-- edge_windows: begin -->", "<!-- edge_windows: end -->"
 
 
-def _solver(problem, friction, nodes, width, refine, cells):
-    """A GeneralSolver with windows of ``cells`` lattice cells x ``refine`` (refine 1: none)."""
+def _solver(problem, friction, nodes, width, windows, refine=None, cells=None):
+    """A GeneralSolver with or without windows (their size _windows.window_size's, or ``cells`` x ``refine``)."""
     from halfslip.solvers._windows import EdgeWindows
     from halfslip.solvers.general import GeneralSolver
 
-    solver = GeneralSolver(problem, friction, nodes, width=width, edge_windows=refine > 1)
-    if refine > 1 and (refine, cells) != (solver.windows.refine, solver.windows.cells):
+    solver = GeneralSolver(problem, friction, nodes, width=width, edge_windows=windows)
+    if windows and (refine or cells):
         solver.windows = EdgeWindows(solver, refine, cells)
     return solver
 
@@ -58,15 +57,20 @@ def _counts(solver):
     return (0, 0) if solver.windows is None else (solver.windows.failed, solver.windows.solved)
 
 
-def random_run(geometry, seed, nodes, refine, cells):
-    """One random history with (refine > 1) or without windows: per-step records for compare()."""
+def _label(solver):
+    w = solver.windows
+    return "-" if w is None else f"{w.cells} cells x {w.refine}"
+
+
+def random_run(geometry, seed, nodes, windows, refine=None, cells=None):
+    """One random history with or without windows: per-step records for compare()."""
     from halfslip.simulator import reference_width
     from halfslip.state import Loads
 
     info = {}
     scene, t, P, Q, M, S = random_history(seed, geometry, info=info)
-    solver = _solver(info["problem"], info["friction"], nodes, reference_width(scene, info["problem"]), refine,
-                     cells)
+    solver = _solver(info["problem"], info["friction"], nodes, reference_width(scene, info["problem"]), windows,
+                     refine, cells)
     state = solver.initial_state(t[0])
     rec = {k: [] for k in ("stick_left", "stick_right", "contact_left", "contact_right", "dissipation", "intervals",
                            "error")}
@@ -83,13 +87,14 @@ def random_run(geometry, seed, nodes, refine, cells):
     out["converged"] = np.ones(t.size - 1, bool)
     out["wall"], out["steps"] = wall, t.size - 1
     out["failed"], out["solved"] = _counts(solver)
+    out["windows"] = _label(solver)
     return out
 
 
-def dovetail_run(nodes, refine, cells):
+def dovetail_run(nodes, windows, refine=None, cells=None):
     """examples/dovetail.yaml marched step by step (no cycle skipped): the outermost stick points of the last
-    cycle's steps, the contact width there, time per step, window solves not converged, window solves and the
-    last cycle's dissipation."""
+    cycle's steps, the contact width there, time per step, window solves not converged, window solves, the
+    last cycle's dissipation and the windows' size."""
     import halfslip as hs
     from halfslip.geometry import NormalProblem
     from halfslip.simulator import reference_width
@@ -98,29 +103,29 @@ def dovetail_run(nodes, refine, cells):
     sc = hs.load_scene(HERE.parent / "examples" / "dovetail.yaml")
     h = sc.history
     problem = NormalProblem(sc.profile, sc.material.compliance)
-    solver = _solver(problem, sc.friction, nodes, reference_width(sc, problem), refine, cells)
+    solver = _solver(problem, sc.friction, nodes, reference_width(sc, problem), windows, refine, cells)
     state = solver.initial_state(h.t[0])
     last = h.t >= h.t[-1] - 1.0 - 1e-12
     edges = []
     began = time.perf_counter()
     for i in range(1, h.t.size):
-        if last[i] and not last[i - 1]:
-            start = state.dissipation
         state, _ = solver.step(state, h.t[i], Loads(h.P[i], h.Q[i], h.M[i], h.sigma[i]))
         if last[i]:
             edges.append((state.stick_left, state.stick_right))
+        if last[i] and not last[i - 1]:  # the last cycle starts at the end of this step
+            start = state.dissipation
     wall = (time.perf_counter() - began) / (h.t.size - 1)
     return (np.array(edges), state.contact_right - state.contact_left, wall) + _counts(solver) + (
-        state.dissipation - start,)
+        state.dissipation - start, _label(solver))
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--nodes", type=int, nargs="+", default=[512, 1024])
     ap.add_argument("--geometries", nargs="+", default=["punch", "hertz"])
-    ap.add_argument("--refine", type=int, default=REFINE, help="fine cells per lattice cell")
-    ap.add_argument("--cells", type=int, default=WINDOW_CELLS, help="lattice cells per window")
-    ap.add_argument("--dovetail", type=int, nargs="*", default=[1000, 2000],
+    ap.add_argument("--refine", type=int, help="fine cells per lattice cell (default: _windows.window_size's)")
+    ap.add_argument("--cells", type=int, help="lattice cells per window (default: _windows.window_size's)")
+    ap.add_argument("--dovetail", type=int, nargs="*", default=[500, 1000, 2000, 4000],
                     help="nodes (against --dovetail-reference)")
     ap.add_argument("--dovetail-reference", type=int, default=16000)
     ap.add_argument("--no-doc", action="store_true")
@@ -128,39 +133,35 @@ def main(argv=None):
     ref = np.load(REFERENCE)
     random_rows, dovetail_rows = [], []
     for g in args.geometries:  # numba compiles or loads its functions at their first call: not in a timed run
-        random_run(g, 0, 4 * args.cells, args.refine, args.cells)
+        random_run(g, 0, 64, True)
     for nodes in args.nodes:
         for g in args.geometries:
-            for refine in (1, args.refine):
+            for windows in (False, True):
                 vouched, every, failed, solved, wall, steps = [], [], 0, 0, 0.0, 0
                 for seed in (0, 1):
-                    run = random_run(g, seed, nodes, refine, args.cells)
+                    run = random_run(g, seed, nodes, windows, args.refine, args.cells)
                     e, v, *_ = compare(run, ref, f"{g}_{seed}_")
                     vouched.append(v)
                     every.append(e)
                     failed, solved = failed + run["failed"], solved + run["solved"]
                     wall, steps = wall + run["wall"], steps + run["steps"]
                 v, e = np.concatenate(vouched), np.concatenate(every)
-                random_rows.append((g, nodes, _windows(refine, args.cells), np.median(v), np.percentile(v, 95),
+                random_rows.append((g, nodes, run["windows"], np.median(v), np.percentile(v, 95),
                                     np.percentile(e, 95), e.max(),
                                     failed, solved, 1e3 * wall / steps))
                 print(_random_row(random_rows[-1]), flush=True)
     if args.dovetail:
-        reference, width, *_, spent = dovetail_run(args.dovetail_reference, 1, args.cells)
+        reference, width, *_, spent, _ = dovetail_run(args.dovetail_reference, False)
         for nodes in args.dovetail:
-            for refine in (1, args.refine):
-                edges, _, wall, failed, solved, cycle = dovetail_run(nodes, refine, args.cells)
+            for windows in (False, True):
+                edges, _, wall, failed, solved, cycle, label = dovetail_run(nodes, windows, args.refine, args.cells)
                 err = np.abs(edges - reference) / width
-                dovetail_rows.append((nodes, _windows(refine, args.cells), np.nanmedian(err),
+                dovetail_rows.append((nodes, label, np.nanmedian(err),
                                       np.nanpercentile(err, 95), np.nanmax(err), cycle / spent - 1.0,
                                       failed, solved, 1e3 * wall))
                 print(_dovetail_row(dovetail_rows[-1]), flush=True)
     if not args.no_doc:
         write_doc(random_rows, dovetail_rows, args, " ".join(sys.argv[1:] if argv is None else argv))
-
-
-def _windows(refine, cells):
-    return "-" if refine == 1 else f"{cells} cells x {refine}"
 
 
 def _random_row(r):

@@ -216,12 +216,13 @@ def reference_width(scene, problem: NormalProblem, edges: ContactEdges | None = 
 RESOLVED_SPACINGS = 16.0
 
 
-def resolving_spacings(spacings: float, windows: bool) -> float:
+def resolving_spacings(spacings: float, windows: bool, nodes: int) -> float:
     """A slip zone at a contact edge of ``spacings`` lattice spacings in the spacings that resolve it: the windows'
-    (REFINE to a lattice spacing) with ``windows`` where it lies within their reach (WINDOW_CELLS - BUFFER)."""
-    from .solvers._windows import BUFFER, REFINE, WINDOW_CELLS
+    (refine to a lattice spacing) with ``windows`` where it lies within their reach (their cells less BUFFER)."""
+    from .solvers._windows import BUFFER, window_size
 
-    return REFINE * spacings if windows and spacings <= WINDOW_CELLS - BUFFER else spacings
+    cells, refine = window_size(nodes)
+    return refine * spacings if windows and refine >= 2 and spacings <= cells - BUFFER else spacings
 
 
 def slip_zone_spacings(ds: xr.Dataset, nodes: int) -> float:
@@ -578,7 +579,7 @@ class _Run:
             ds.attrs["solver_nodes"] = scene.solver.nodes
             spacings = slip_zone_spacings(ds, scene.solver.nodes)
             ds.attrs["widest_slip_zone_spacings"] = spacings
-            if 0.0 < resolving_spacings(spacings, scene.solver.edge_windows) < RESOLVED_SPACINGS:
+            if 0.0 < resolving_spacings(spacings, scene.solver.edge_windows, scene.solver.nodes) < RESOLVED_SPACINGS:
                 note = (f"the widest slip zone spans only {spacings:.3g} lattice spacings: slip and dissipation are "
                         f"resolved to a few per cent (raise solver.nodes towards "
                         f"{int(math.ceil(RESOLVED_SPACINGS / spacings * scene.solver.nodes))})")

@@ -43,16 +43,32 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-#: Fine cells per lattice cell in a window.
+#: Fine cells per lattice cell in a window (fewer where a window would have more than MAX_FINE_CELLS).
 REFINE = 4
-#: Lattice cells a window spans at each contact edge (the first and last cells of the contact).
+#: Lattice cells a window spans at each contact edge (the first and last cells of the contact), at least: a
+#: window spans WINDOW_WIDTH of the reference width (window_size).
 WINDOW_CELLS = 16
+#: The width a window spans, as a fraction of the reference width (the solver's ``width``: nodes cells): its
+#: reach, less BUFFER cells, is to cover the slip zones it resolves, and the dovetail's are 1.2 % of the contact
+#: (docs/general_solver.md): 16 cells at 1000 nodes reach 12. Sized in cells instead, 16 cells at 2000 nodes
+#: stopped short of them (edges 1.1e-4 of the width at the 95th percentile against 7.8e-6 with 32 cells).
+WINDOW_WIDTH = 0.016
+#: Fine cells a window has at most: its dense active set costs their cube (REFINE is lowered to keep within it,
+#: and at REFINE 1 there is no window: from 8000 nodes the lattice is as fine as the windows at 2000).
+MAX_FINE_CELLS = 128
 #: A window's stick edge within this many lattice cells of its inner end is left to the lattice: the window is
 #: cut off there (the lattice's shear held fixed beyond it), so an edge there is the cut's, not the contact's
 #: (tests/test_windows.py: without it the J1/J2 edges at 256 nodes come out worse than the lattice's).
 BUFFER = 4
 #: Active-set iterations at most for a window.
 WINDOW_ITERATIONS = 60
+#: The rounding a window's cell loads may take from _Load's closed form, relative to a fine cell's mean load
+#: (the lattice's LOAD_ROUNDING is 1e-11, for its gross sliding q = f p and int q = Q to rounding): on the rounded
+#: punch's random histories the closed form rounds to 1.5e-11 of a fine cell's load in the median, 5e-10 at most,
+#: and the lattice's limit sent all but 3 % of its windows to the quadrature (0.1 ms a window); a window's bounds
+#: need no more (its active set's Coulomb tolerance is 1e-10 of its largest bound, its edges and slip are placed
+#: to a thousandth of a cell at best).
+WINDOW_LOAD_ROUNDING = 1e-9
 
 
 @dataclass(frozen=True)
@@ -106,12 +122,24 @@ class EdgeWindow:
         return (j < n if self.side < 0 else j >= 0), np.clip(j, 0, n - 1)
 
 
-class EdgeWindows:
-    """The windows of one :class:`GeneralSolver`: kernel tables per lattice spacing and :meth:`solve`."""
+def window_size(nodes: int) -> tuple[int, int]:
+    """(cells, refine) of the windows of a solver of ``nodes`` cells across its reference width: WINDOW_WIDTH of
+    it, at least WINDOW_CELLS cells, refined REFINE times or as much as MAX_FINE_CELLS allows (refine < 2: no
+    windows)."""
+    cells = max(WINDOW_CELLS, math.ceil(WINDOW_WIDTH * nodes - 1e-9))
+    return cells, min(REFINE, MAX_FINE_CELLS // cells)
 
-    def __init__(self, solver, refine: int = REFINE, cells: int = WINDOW_CELLS):
+
+class EdgeWindows:
+    """The windows of one :class:`GeneralSolver`: kernel tables per lattice spacing and :meth:`solve`; ``refine``
+    and ``cells`` by default from the solver's nodes (:func:`window_size`)."""
+
+    def __init__(self, solver, refine: int | None = None, cells: int | None = None):
         from . import general
 
+        sized_cells, sized_refine = window_size(solver.nodes)
+        refine = sized_refine if refine is None else refine
+        cells = sized_cells if cells is None else cells
         self.G, self.solver, self.refine, self.cells = general, solver, int(refine), int(cells)
         self._tables: dict = {}
         self.solved = self.failed = 0
@@ -225,7 +253,7 @@ class EdgeWindows:
         L, R_, c, d = N.left, N.right, N.center, N.half_width
         first, n = G._cells(L, R_, hf)
         at_left, at_right = j0 <= first, j1 >= first + n - 1
-        limit = G.LOAD_ROUNDING * N.P * hf / (R_ - L)
+        limit = WINDOW_LOAD_ROUNDING * N.P * hf / (R_ - L)
         inner, cum, _ = G._closed_form_loads(L, R_, hf, j0, j1 + 1, N.P, *N.pressure_arguments(), limit)
         if cum.size:
             ks = np.arange(j0, j1 + 2)

@@ -424,9 +424,10 @@ class GeneralSolver(TangentialSolver):
         self._lattices: dict[float, ToeplitzLattice] = {}
         self.windows = None
         if edge_windows:
-            from ._windows import EdgeWindows
+            from ._windows import EdgeWindows, window_size
 
-            self.windows = EdgeWindows(self)
+            if window_size(self.nodes)[1] >= 2:  # (from 8000 nodes the lattice is as fine as windows would be)
+                self.windows = EdgeWindows(self)
         self._kinks, self._graded_kinks = _slope_kinks(problem.profile)
         self._end_cells = _Kept(END_CELLS_KEPT)
         self._loads = _Kept(LOADS_KEPT)
