@@ -44,12 +44,12 @@ BEGIN, END = "<!-- edge_windows: begin -->", "<!-- edge_windows: end -->"
 
 def _solver(problem, friction, nodes, width, windows, refine=None, cells=None):
     """A GeneralSolver with or without windows (their size _windows.window_size's, or ``cells`` x ``refine``)."""
+    from halfslip.solvers import general
     from halfslip.solvers._windows import EdgeWindows
-    from halfslip.solvers.general import GeneralSolver
 
-    solver = GeneralSolver(problem, friction, nodes, width=width, edge_windows=windows)
+    solver = general.GeneralSolver(problem, friction, nodes, width=width, edge_windows=windows)
     if windows and (refine or cells):
-        solver.windows = EdgeWindows(solver, refine, cells)
+        solver.windows = EdgeWindows(solver, general, refine, cells)
     return solver
 
 

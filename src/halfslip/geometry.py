@@ -1277,6 +1277,12 @@ class NormalProblem:
             raise ValueError("half_width, load and pressure(x, P) need a symmetric profile; use solve(P, M)")
         return self._forms
 
+    @property
+    def cheap_half_width(self) -> bool:
+        """Whether :meth:`half_width` and :meth:`load` are closed forms (Hertz, the rounded punch), not a
+        root-finding over the profile's moments (a symmetric tabulated profile) or unavailable."""
+        return self._forms is not None and self._forms.cheap_half_width
+
     def half_width(self, P: ArrayLike) -> FloatArray:
         """Half-width a(P) [m] of the symmetric contact [-a, a] under M = 0.
 

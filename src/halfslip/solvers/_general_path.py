@@ -86,7 +86,11 @@ class EdgePath:
     Notes
     -----
     Three representations: the symmetric profiles with M = 0 all along use the
-    vectorised a(P) and P(a) of the normal problem (exact); a step starting
+    vectorised a(P) and P(a) of the normal problem (exact; since 0.4.5 only
+    where they are closed forms, or where the step starts separated: a
+    symmetric tabulated profile's steps in contact take the hermite form,
+    its a(P) costing a root-finding over the profile's moments at every
+    arrival point, 0.8 ms each); a step starting
     separated interpolates ``FORMATION_SOLVES`` solutions in mu =
     sqrt((lam - lam_lo) / (1 - lam_lo)) (a ~ sqrt(P) for Hertz is linear in
     mu); any other step uses the cubic Hermite interpolant of the end edges
@@ -108,7 +112,10 @@ class EdgePath:
         #: same step asks for the same ones
         self.integrals: dict[tuple, np.ndarray] = {}
         self._start: tuple[float, float] | None = None  # the edges at lam_lo
-        self._symmetric = problem.profile.symmetric and loads0.M == 0.0 and loads1.M == 0.0
+        # (a symmetric tabulated profile's a(P) is a root-finding over its moments, 0.8 ms a point: its steps that
+        # do not start separated take the hermite form, whose edges are exact at the ends)
+        self._symmetric = (problem.profile.symmetric and loads0.M == 0.0 and loads1.M == 0.0
+                           and (problem.cheap_half_width or start is None))
         if self._symmetric:
             self._kind = "symmetric"
         elif start is None:

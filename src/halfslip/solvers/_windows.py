@@ -132,11 +132,10 @@ def window_size(nodes: int) -> tuple[int, int]:
 
 class EdgeWindows:
     """The windows of one :class:`GeneralSolver`: kernel tables per lattice spacing and :meth:`solve`; ``refine``
-    and ``cells`` by default from the solver's nodes (:func:`window_size`)."""
+    and ``cells`` by default from the solver's nodes (:func:`window_size`). ``general`` is the solver's module
+    (halfslip.solvers.general, which imports this one): its lattice's parts, taken as they are."""
 
-    def __init__(self, solver, refine: int | None = None, cells: int | None = None):
-        from . import general
-
+    def __init__(self, solver, general, refine: int | None = None, cells: int | None = None):
         sized_cells, sized_refine = window_size(solver.nodes)
         refine = sized_refine if refine is None else refine
         cells = sized_cells if cells is None else cells

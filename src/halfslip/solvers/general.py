@@ -54,6 +54,7 @@ from __future__ import annotations
 
 import functools
 import math
+import sys
 from dataclasses import dataclass
 
 import numba
@@ -65,6 +66,7 @@ from ..geometry import NormalProblem, NormalSolution
 from ..state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime, StepReport
 from ..state import frozen as _frozen
 from ._general_path import EdgePath, arrival_strain_parts, hermite_integrals
+from ._windows import EdgeWindows, same_windows, window_size
 from . import _toeplitz
 from ._toeplitz import ToeplitzLattice, _end_matvec, _G, _run_array, _run_bounds, kernel, stick_solve, table_products
 from .base import BACKWARD_SLIP, FORWARD_SLIP, OUT_OF_CONTACT, STICK, TangentialSolver
@@ -423,11 +425,8 @@ class GeneralSolver(TangentialSolver):
             raise ValueError(f"travel must be >= 0, got {travel!r}")
         self._lattices: dict[float, ToeplitzLattice] = {}
         self.windows = None
-        if edge_windows:
-            from ._windows import EdgeWindows, window_size
-
-            if window_size(self.nodes)[1] >= 2:  # (from 8000 nodes the lattice is as fine as windows would be)
-                self.windows = EdgeWindows(self)
+        if edge_windows and window_size(self.nodes)[1] >= 2:  # (from 8000 nodes the lattice is as fine)
+            self.windows = EdgeWindows(self, sys.modules[__name__])
         self._kinks, self._graded_kinks = _slope_kinks(problem.profile)
         self._end_cells = _Kept(END_CELLS_KEPT)
         self._loads = _Kept(LOADS_KEPT)
@@ -1212,8 +1211,6 @@ class GeneralSolver(TangentialSolver):
         qs = self.f * max(float(ma.capacity.max()), float(mb.capacity.max()))
         dq = float(np.max(np.abs(ma.q - mb.q))) / qs
         if ma.windows or mb.windows:
-            from ._windows import same_windows
-
             # the windows on the same cells; not their shear: they are the lattice's output (one-way coupled),
             # a steady lattice drives them to a steady state only slowly (the dovetail: their shear creeps by
             # 4e-6 of f max p a cycle, their edges by 8e-6 of a cell), and the cycle check (cycles.py) holds
