@@ -189,31 +189,7 @@ class EdgeWindows:
         q, c, status, converged = _active_set(tf, gout, lock, qmax, force, hf, status, qtol, stol,
                                               WINDOW_ITERATIONS)
         cap = qmax / S.f
-        # each fine cell's slip in the take (0 where stuck), its slip since it entered contact, and the dissipation
-        # it takes over from cells lo .. hi - 1
-        fine_index = j0 + np.arange(nf)
-        arrived = ~((xf > N0.left) & (xf < N0.right))
-        # the window's slip where the cut cannot set it: its cells within BUFFER lattice cells of the inner end stuck
-        cut = status[nf - BUFFER * R:] if side < 0 else status[:BUFFER * R]
-        if converged and not np.any(cut):
-            slip = np.where(status != 0, gout + c - _fine_products(tf, j0, nf, j0, q) - lock, 0.0)
-            same = [w for w in old if w.side == side and w.first == j0 and w.q.size == nf]
-            cap0 = same[0].capacity if same else self._start_loads(N0, hf, j0, j1, side, R * m1.first,
-                                                                    R * (m1.first + n) - 1)
-            moved = status != 0
-            spent = S.f * hf * float(np.sum(0.5 * (cap0[moved] + cap[moved]) * np.abs(slip[moved])))
-            moved = m1.status[lo:hi] != 0
-            spent -= S.f * h * float(np.sum(0.5 * (fine.cap0[lo:hi][moved] + m1.capacity[lo:hi][moved])
-                                            * np.abs(fine.slip[lo:hi][moved])))
-            G = np.zeros(nf)  # the slip before the take: the lattice's as it reads there, the old windows' own
-            G[~arrived] = np.interp(xf[~arrived], mem0.x, mem0.G)
-            for w in old:
-                k = fine_index - w.first
-                had = (k >= 0) & (k < w.q.size) & ~arrived
-                G[had] = w.G[k[had]]
-            G += slip
-        else:  # the lattice's: its dissipation, its slip as it reads at the fine centres
-            spent, G = 0.0, np.interp(xf, m1.x, m1.G)
+        spent, G = self._slip(state, fine, side, converged, status, q, c, gout, lock, cap, old, j0, xf, tf, lo, hi)
         for a in (q, cap, status, G):
             a.flags.writeable = False
         window = EdgeWindow(side, j0, hf, q, cap, status, G, lo, hi, float(fine.stick[(side + 1) // 2]), spent)
@@ -228,6 +204,39 @@ class EdgeWindows:
         return window, edge
 
     # -- the parts ------------------------------------------------------------------------------------------
+    def _slip(self, state, fine, side, converged, status, q, c, gout, lock, cap, old, j0, xf, tf, lo, hi):
+        """(what the window changes the take's dissipation by, the slip accumulated at its fine cells): its fine
+        cells' slip in the take (their displacement less their lock, 0 where stuck) added to the slip before it
+        (the lattice's as it reads there, the old windows' own where they had the cell), and their f (cap0 +
+        cap) / 2 |slip| hf in place of the lattice's cells lo .. hi - 1. Where the window did not converge or
+        its cells within BUFFER lattice cells of its inner end slip (the cut, not the contact, would set their
+        slip): (0, the lattice's slip as it reads at the fine centres)."""
+        S, R, m1, mem0 = self.solver, self.refine, fine.memory, state.memory
+        nf, h = xf.size, m1.spacing
+        hf = h / R
+        cut = status[nf - BUFFER * R:] if side < 0 else status[:BUFFER * R]
+        if not converged or np.any(cut):
+            return 0.0, np.interp(xf, m1.x, m1.G)
+        N0 = mem0.normal
+        slip = np.where(status != 0, gout + c - _fine_products(tf, j0, nf, j0, q) - lock, 0.0)
+        same = [w for w in old if w.side == side and w.first == j0 and w.q.size == nf]
+        n = m1.q.size
+        cap0 = same[0].capacity if same else self._start_loads(N0, hf, j0, j0 + nf - 1, side, R * m1.first,
+                                                                R * (m1.first + n) - 1)
+        moved = status != 0
+        spent = S.f * hf * float(np.sum(0.5 * (cap0[moved] + cap[moved]) * np.abs(slip[moved])))
+        moved = m1.status[lo:hi] != 0
+        spent -= S.f * h * float(np.sum(0.5 * (fine.cap0[lo:hi][moved] + m1.capacity[lo:hi][moved])
+                                        * np.abs(fine.slip[lo:hi][moved])))
+        arrived = ~((xf > N0.left) & (xf < N0.right))
+        G = np.zeros(nf)
+        G[~arrived] = np.interp(xf[~arrived], mem0.x, mem0.G)
+        for w in old:
+            k = j0 + np.arange(nf) - w.first
+            had = (k >= 0) & (k < w.q.size) & ~arrived
+            G[had] = w.G[k[had]]
+        return spent, G + slip
+
     def _kernel_tables(self, h, span):
         """(tabs, span, tf): the lattice's kernel at the REFINE fine offsets within a cell over +- span cells
         (``tabs[m, span + k]`` = t(k h + (m + 1/2) h / R - h / 2)), and the fine kernel over R (span + cells)
@@ -247,7 +256,7 @@ class EdgeWindows:
 
     def _loads(self, N, hf, j0, j1):
         """(1/hf) int p over the fine cells j0 .. j1, the one at a contact edge reaching to it: _Load's closed form
-        (where its rounding passes _Load's test) or its quadrature, over these cells only."""
+        (where it rounds to WINDOW_LOAD_ROUNDING at most) or its quadrature, over these cells only."""
         G, S = self.G, self.solver
         L, R_, c, d = N.left, N.right, N.center, N.half_width
         first, n = G._cells(L, R_, hf)
