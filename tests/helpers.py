@@ -13,6 +13,14 @@ from halfslip.geometry import Hertz, NormalProblem, RoundedPunch
 from halfslip.state import Loads
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+#: The smallest valid scene text (a Hertz pad loaded by P alone).
+MINIMAL_SCENE = """\
+material: {E: 200e9, nu: 0.3}
+friction: 0.6
+geometry: {kind: hertz, radius: 50e-3}
+loads:
+  - ramp: {to: {P: 1e5}, duration: 1, steps: 10}
+"""
 DATA = Path(__file__).resolve().parent / "data"
 
 A = 4 * (1 - 0.3**2) / 200e9

@@ -10,15 +10,11 @@ import pytest
 import halfslip as hs
 from halfslip import HalfslipInputError, OutputOptions, Scene, SolverOptions, load_scene, parse_scene
 
+import helpers
+
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 
-MINIMAL = """\
-material: {E: 200e9, nu: 0.3}
-friction: 0.6
-geometry: {kind: hertz, radius: 50e-3}
-loads:
-  - ramp: {to: {P: 1e5}, duration: 1, steps: 10}
-"""
+MINIMAL = helpers.MINIMAL_SCENE
 
 
 def shear_ratio_everywhere(scene: Scene) -> float:

@@ -510,16 +510,7 @@ def test_a_memory_from_before_the_windows_decodes_without_them():
 # =============================================================================
 # 7. the scene option
 # =============================================================================
-SCENE = """\
-material: {E: 200e9, nu: 0.3}
-friction: 0.6
-geometry: {kind: hertz, radius: 50e-3}
-loads:
-  - ramp: {to: {P: 1e5}, duration: 1, steps: 10}
-solver:
-  method: general
-  edge_windows: %s
-"""
+SCENE = helpers.MINIMAL_SCENE + "solver:\n  method: general\n  edge_windows: %s\n"
 
 
 def test_scene_option_edge_windows():
