@@ -292,7 +292,7 @@ class GeneralMemory:
         The shadow lattice's memory (half the resolution) for the error estimate.
     windows : tuple of EdgeWindow
         The fine windows at the contact edges after the take that ended here (``edge_windows``;
-        :mod:`halfslip.solvers._windows`): their own shear, the history of the next take's windows.
+        :mod:`halfslip.solvers._windows`): their own shear and slip, the history of the next take's windows.
     """
 
     normal: NormalSolution | None
@@ -383,8 +383,10 @@ class GeneralSolver(TangentialSolver):
         warm-started solve to the normal solver's tolerance.
     edge_windows : bool
         After every fine take, solve the contact's first and last cells again
-        on fine windows (:mod:`halfslip.solvers._windows`) for the outermost
-        stick points; the state carries the windows' shear as their history.
+        on fine windows (:mod:`halfslip.solvers._windows`): the outermost
+        stick points, the shear, slip and station states on their cells and
+        the dissipation there are theirs; the state carries their shear and
+        slip as their history (none from 8000 nodes: the lattice is as fine).
 
     Attributes
     ----------
