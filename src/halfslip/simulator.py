@@ -212,7 +212,7 @@ def reference_width(scene, problem: NormalProblem, edges: ContactEdges | None = 
 #: against 4000 nodes (docs/general_solver.md); the slip amplitude read at stations is worse
 #: (17 % high at its peak at 1000 nodes, docs/user_guide.md). With solver.edge_windows a slip zone at a contact
 #: edge within the windows' reach is resolved on their cells, REFINE times finer: the dovetail's dissipation per
-#: cycle is then 0.04 % off at 500 nodes and 0.015 % at 1000, against 8000 (docs/general_solver.md).
+#: cycle is then 0.09 % off at 500 nodes and 0.06 % at 1000, against 16000 (docs/general_solver.md).
 RESOLVED_SPACINGS = 16.0
 
 

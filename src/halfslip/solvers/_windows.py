@@ -32,7 +32,7 @@ benchmarks/bench_edge_windows.py, docs/benchmarks.md): the rounded punch's rando
 percentile of the vouched stick edges 2.7e-4 -> 9.6e-5 of the width (Hertz 6.1e-5 -> 6.0e-5: set inside the
 contact), 2.5 -> 5.2 ms a step; the dovetail (every step marched) at 1000 nodes against 16000, 95th percentile
 2.1e-4 -> 6.1e-5, 0.51 -> 1.11 ms a step (its largest, 3.4e-3, is the load maximum's ill-conditioned band, which
-they leave as it is), dissipation per cycle 0.29 % -> 0.04 % off (against 8000 nodes). A window's edge far from
+they leave as it is), dissipation per cycle 0.31 % -> 0.06 % off (against 16000 nodes). A window's edge far from
 the lattice's says so: the step's error estimate is at least their distance.
 """
 from __future__ import annotations
