@@ -640,7 +640,9 @@ def test_windows_leave_the_lattices_sub_steps_alone():
     punch took no sub-steps instead of two and dissipated 1.2e-3 less (found by the tests' author at 4fe595a;
     3 of 20 seeded random histories at 64 - 256 nodes differed in their sub-steps, dissipation up to 1.1e-3
     off). Checked: that step, and seeded random ramps (P, Q, M, sigma) on both profiles, where the lattice's
-    every cell and the sub-step count are the same bitwise with and without windows."""
+    every cell and the sub-step count are the same bitwise with and without windows, and the windowed run keeps
+    the invariants (converged, dissipation non-decreasing, edges in the contact, |q| <= f p, the estimate at
+    least the windows' distance from the lattice's edges)."""
     problem = problem_of("punch")
     path = [(P0, 0.0), (P0, 0.1 * F * P0), (1.002 * P0, 0.3220667936149144 * F * P0)]
     runs = []
@@ -666,8 +668,20 @@ def test_windows_leave_the_lattices_sub_steps_alone():
                 got.append((march(solver, path), solver.counters["substeps"]))
             (plain, n0), (windowed, n1) = got
             assert n0 == n1
-            for (s0, _), (s1, _) in zip(plain, windowed):
+            before = 0.0
+            for (s0, _), (s1, r1) in zip(plain, windowed):
                 assert np.array_equal(s0.memory.q, s1.memory.q) and np.array_equal(s0.memory.status, s1.memory.status)
+                # the windowed run's own invariants: converged, dissipation non-decreasing, edges in the contact,
+                # within f p, the estimate at least the windows' distance from the lattice
+                assert r1.converged and s1.dissipation >= before
+                before = s1.dissipation
+                if math.isfinite(s1.stick_left):
+                    assert s1.contact_left <= s1.stick_left <= s1.stick_right <= s1.contact_right
+                    assert apart(s0, s1) <= r1.error_estimate
+                if s1.memory.normal is not None:
+                    x = np.linspace(s1.contact_left, s1.contact_right, 2001)
+                    p, q = solver.tractions(s1.memory, x)
+                    assert np.all(np.abs(q) <= F * p * (1 + 1e-9))
 
 
 #: The windows' dissipation against the exact method's (the rounded punch and Hertz are symmetric, M = sigma = 0:
