@@ -30,8 +30,8 @@ their cells (GeneralSolver.tractions, slip, station_states) and the dissipation;
 cells, its sub-steps, its estimate) is the same with or without them. Measured (2026-11-29,
 benchmarks/bench_edge_windows.py, docs/benchmarks.md): the rounded punch's random histories at 512 nodes, 95th
 percentile of the vouched stick edges 2.7e-4 -> 9.6e-5 of the width (Hertz 6.1e-5 -> 6.0e-5: set inside the
-contact), 2.5 -> 5.2 ms a step; the dovetail (every step marched) at 1000 nodes against 16000, 95th percentile
-2.1e-4 -> 6.1e-5, 0.51 -> 1.11 ms a step (its largest, 3.4e-3, is the load maximum's ill-conditioned band, which
+contact), 2.6 -> 4.9 ms a step; the dovetail (every step marched) at 1000 nodes against 16000, 95th percentile
+2.1e-4 -> 6.1e-5, 0.54 -> 1.02 ms a step (its largest, 3.4e-3, is the load maximum's ill-conditioned band, which
 they leave as it is), dissipation per cycle 0.31 % -> 0.06 % off (against 16000 nodes). A window's edge far from
 the lattice's says so: the step's error estimate is at least their distance.
 """
@@ -90,8 +90,8 @@ class EdgeWindow:
     status : ndarray of int8
         0 stuck, +1 / -1 slipping forward / backward in the take (unconverged: the last iterate's).
     G : ndarray
-        Slip accumulated since each fine cell entered contact [m] (the lattice's of its cell until a window
-        first covered it).
+        Slip accumulated since each fine cell entered contact [m] (the lattice's as it reads at the cell's centre
+        until a window first covered it, and where the window falls back to the lattice's slip).
     lo, hi : int
         The memory's cells (lo .. hi - 1, as indices of its arrays) the window stands in for.
     lattice_edge : float
@@ -99,7 +99,8 @@ class EdgeWindow:
         control measures the travel of stick edges from: the windows leave the lattice as it is).
     dissipation : float
         What the window changed the take's dissipation by [J/m]: its fine cells' f (cap0 + cap) / 2 |slip|
-        hf in place of the lattice's cells lo .. hi - 1 (0 where it did not converge).
+        hf in place of the lattice's cells lo .. hi - 1 (0 where it did not converge or a slip zone reaches
+        its cut: EdgeWindows._slip).
     """
 
     side: int
@@ -175,7 +176,8 @@ class EdgeWindows:
         nf = j1 - j0 + 1
         span = max(n, mem0.q.size) + abs(m1.first - mem0.first) + 2 * WC + 4
         tabs, span, tf = self._kernel_tables(h, span)
-        qmax = S.f * self._loads(N1, hf, j0, j1)
+        cap = self._loads(N1, hf, j0, j1)
+        qmax = S.f * cap
         gout = self._field(m1, loads1, tabs, span, tf, j0, nf, (), ((lo, hi),))
         old = tuple(w for w in mem0.windows if w.spacing == hf)
         lock = self._field(mem0, state.loads, tabs, span, tf, j0, nf, old, tuple((w.lo, w.hi) for w in old))
@@ -188,7 +190,6 @@ class EdgeWindows:
         self.solved += 1
         q, c, status, converged = _active_set(tf, gout, lock, qmax, force, hf, status, qtol, stol,
                                               WINDOW_ITERATIONS)
-        cap = qmax / S.f
         spent, G = self._slip(state, fine, side, converged, status, q, c, gout, lock, cap, old, j0, xf, tf, lo, hi)
         for a in (q, cap, status, G):
             a.flags.writeable = False
@@ -196,7 +197,7 @@ class EdgeWindows:
         if not converged:
             self.failed += 1
             return window, None
-        edge = self._edge(xf, hf, status, q, qmax, state, loads1, ctx, side)
+        edge = self._edge(xf, hf, status, q, qmax, state, loads1, ctx, fine, side)
         if edge is not None:
             inner = (m1.first + hi) * h if side < 0 else (m1.first + lo) * h
             if side * (inner - edge) > -BUFFER * h:  # within BUFFER cells of the inner end: the lattice's
@@ -219,10 +220,7 @@ class EdgeWindows:
             return 0.0, np.interp(xf, m1.x, m1.G)
         N0 = mem0.normal
         slip = np.where(status != 0, gout + c - _fine_products(tf, j0, nf, j0, q) - lock, 0.0)
-        same = [w for w in old if w.side == side and w.first == j0 and w.q.size == nf]
-        n = m1.q.size
-        cap0 = same[0].capacity if same else self._start_loads(N0, hf, j0, j0 + nf - 1, side, R * m1.first,
-                                                                R * (m1.first + n) - 1)
+        cap0 = self._start_loads(N0, hf, j0, j0 + nf - 1, side, R * m1.first, R * (m1.first + m1.q.size) - 1)
         moved = status != 0
         spent = S.f * hf * float(np.sum(0.5 * (cap0[moved] + cap[moved]) * np.abs(slip[moved])))
         moved = m1.status[lo:hi] != 0
@@ -258,7 +256,7 @@ class EdgeWindows:
         """(1/hf) int p over the fine cells j0 .. j1, the one at a contact edge reaching to it: _Load's closed form
         (where it rounds to WINDOW_LOAD_ROUNDING at most) or its quadrature, over these cells only."""
         G, S = self.G, self.solver
-        L, R_, c, d = N.left, N.right, N.center, N.half_width
+        L, R_ = N.left, N.right
         first, n = G._cells(L, R_, hf)
         at_left, at_right = j0 <= first, j1 >= first + n - 1
         limit = WINDOW_LOAD_ROUNDING * N.P * hf / (R_ - L)
@@ -277,29 +275,7 @@ class EdgeWindows:
         xb = R_ if at_right else (j1 + 1) * hf
         inner = np.arange(j0 + 1, j1 + 1) * hf
         inner = inner[(inner > L) & (inner < R_)]
-        kinks = S._kinks[(S._kinks > L) & (S._kinks < R_)]
-        extra = [kinks]
-        if S._graded_kinks and kinks.size:
-            step = min(hf, d) * 0.25 ** np.arange(1, G.KINK_GRADING + 1)
-            extra += [kinks[:, None] - step[None, :], kinks[:, None] + step[None, :], L + step, R_ - step]
-        extra = np.concatenate([e.ravel() for e in extra])
-        extra = extra[(extra > xa) & (extra < xb)]
-        pts = np.unique(np.concatenate((inner, extra)))
-        bounds = np.concatenate(([xa], pts, [xb]))
-        th = np.arccos(np.clip((c - bounds) / d, -1.0, 1.0))
-        near = np.zeros(bounds.size - 1, bool)
-        if extra.size:
-            at = np.searchsorted(bounds, extra)
-            near[at - 1] = near[np.minimum(at, bounds.size - 2)] = True
-        if xa == L:
-            near[:2] = True
-        if xb == R_:
-            near[-2:] = True
-        part = G._interval_loads(th[:-1], np.diff(th), near, c, d, G._GL_T, G._GL_W, G._KINK_T, G._KINK_W, G._FAR_T,
-                                 G._FAR_W, G.FAR_SPANS, N.pressure_arguments())
-        cum = np.concatenate(([0.0], np.cumsum(part)))
-        at = np.concatenate(([0], np.searchsorted(bounds, inner), [bounds.size - 1]))
-        return np.diff(cum[at]) / hf
+        return np.diff(G._quadrature_loads(N, xa, xb, inner, S._kinks, S._graded_kinks, hf)) / hf
 
     def _loads_over(self, N, hf, j0, j1):
         """:meth:`_loads` of the fine cells j0 .. j1 under the contact ``N``, 0 on those outside it."""
@@ -372,16 +348,18 @@ class EdgeWindows:
         out[arrived] = inc
         return out
 
-    def _edge(self, xf, hf, status, q, qmax, state, loads1, ctx, side):
-        """The window's outermost stick point on its side (None: no stick cell)."""
+    def _edge(self, xf, hf, status, q, qmax, state, loads1, ctx, fine, side):
+        """The window's outermost stick point on its side (None: no stick cell); (S1) as the lattice's take
+        found it (``fine.slipping``), its drives where an edge slips."""
         G, S = self.G, self.solver
         N1, nf = ctx.N1, xf.size
         stuck = np.flatnonzero(status == 0)
         if stuck.size == 0:
             return None
-        drives = G._edge_drives(N1, state.loads, loads1)
-        slipping = G._slipping_edges(drives, state.loads, loads1, S.f)
-        drives = tuple((u / S.f, v) for u, v in drives) if any(slipping) else None
+        slipping = fine.slipping
+        drives = None
+        if any(slipping):
+            drives = tuple((u / S.f, v) for u, v in G._edge_drives(N1, state.loads, loads1))
         # the stick run nearest the contact edge; the window's inner end is no contact edge: a slipping cell
         # beyond it keeps _run_edges from reading it as one
         i = k = stuck[0] if side < 0 else stuck[-1]

@@ -1312,7 +1312,6 @@ class _Load:
 
     def __init__(self, N: NormalSolution, h: float, kinks: np.ndarray = np.zeros(0), graded: bool = True):
         self.N, self.h = N, h
-        c, d = N.center, N.half_width
         self.k0 = math.ceil(N.left / h)
         # the lattice points inside the contact, the closed form there and the size of its terms, which varies
         # smoothly along the contact: LOAD_SAMPLES samples find its largest
@@ -1325,36 +1324,47 @@ class _Load:
         if self.closed_form:
             self.cum = cum
             return
-        kinks = kinks[(kinks > N.left) & (kinks < N.right)]
-        extra = [kinks]
-        if graded and kinks.size:
-            # graded towards the kinks and towards the contact edges, where p changes on the scale of the
-            # distance between edge and kink (a - w of a lightly loaded punch) rather than of the cell
-            step = min(h, d) * 0.25 ** np.arange(1, KINK_GRADING + 1)
-            extra += [kinks[:, None] - step[None, :], kinks[:, None] + step[None, :], N.left + step,
-                      N.right - step]
-        extra = np.concatenate([e.ravel() for e in extra])
-        extra = extra[(extra > N.left) & (extra < N.right)]
-        pts = np.unique(np.concatenate((inner, extra)))
-        bounds = np.concatenate(([N.left], pts, [N.right]))
-        th = np.arccos(np.clip((c - bounds) / d, -1.0, 1.0))
-        lo, span = th[:-1], np.diff(th)
-        near = np.zeros(bounds.size - 1, bool)
-        if extra.size:
-            # the intervals next to a kink (and its grading): p is x ln x there, KINK_GAUSS points
-            at = np.searchsorted(bounds, extra)  # extra's places among the bounds (all of them are there)
-            near[at - 1] = near[np.minimum(at, bounds.size - 2)] = True
-            near[:2] = near[-2:] = True
-        part = _interval_loads(lo, span, near, c, d, _GL_T, _GL_W, _KINK_T, _KINK_W, _FAR_T, _FAR_W, FAR_SPANS,
-                               N.pressure_arguments())
-        cum = np.concatenate(([0.0], np.cumsum(part)))  # at bounds
-        at = np.searchsorted(pts, inner) + 1  # the lattice points among the bounds
-        self.cum = np.concatenate(([0.0], cum[at], [cum[-1]]))
+        self.cum = _quadrature_loads(N, N.left, N.right, inner, kinks, graded, h)
 
     def capacity(self, first: int, n: int, spacing: float) -> np.ndarray:
         """(1/spacing) int p over each of the n cells from ``first``, the end cells extended to the edges
         (normalised so that spacing sum = P: the quadrature's own ~1e-10 would show in gross sliding)."""
         return _cell_loads(self.cum, self.k0, self.inner, first, n, round(spacing / self.h), spacing, self.N.P)
+
+
+def _quadrature_loads(N: NormalSolution, xa: float, xb: float, inner: np.ndarray, kinks: np.ndarray, graded: bool,
+                      h: float) -> np.ndarray:
+    """int p from ``xa`` to ``xa``, each of ``inner`` (increasing, strictly between) and ``xb``, by _Load's
+    quadrature (its notes): Gauss-Legendre in theta on the intervals between these points and the kinks of h'
+    inside the contact, graded towards the kinks (and, where ``graded``, towards the contact edges) on the scale
+    of min(``h``, d), KINK_GAUSS points beside them. _Load takes it over the contact at its lattice points, the
+    edge windows (solvers._windows) over theirs."""
+    L, R, c, d = N.left, N.right, N.center, N.half_width
+    kinks = kinks[(kinks > L) & (kinks < R)]
+    extra = [kinks]
+    if graded and kinks.size:
+        # graded towards the kinks and towards the contact edges, where p changes on the scale of the
+        # distance between edge and kink (a - w of a lightly loaded punch) rather than of the cell
+        step = min(h, d) * 0.25 ** np.arange(1, KINK_GRADING + 1)
+        extra += [kinks[:, None] - step[None, :], kinks[:, None] + step[None, :], L + step, R - step]
+    extra = np.concatenate([e.ravel() for e in extra])
+    extra = extra[(extra > xa) & (extra < xb)]
+    pts = np.unique(np.concatenate((inner, extra)))
+    bounds = np.concatenate(([xa], pts, [xb]))
+    th = np.arccos(np.clip((c - bounds) / d, -1.0, 1.0))
+    near = np.zeros(bounds.size - 1, bool)
+    if extra.size:
+        # the intervals next to a kink (and its grading): p is x ln x there, KINK_GAUSS points
+        at = np.searchsorted(bounds, extra)  # extra's places among the bounds (all of them are there)
+        near[at - 1] = near[np.minimum(at, bounds.size - 2)] = True
+        if xa == L:
+            near[:2] = True
+        if xb == R:
+            near[-2:] = True
+    part = _interval_loads(th[:-1], np.diff(th), near, c, d, _GL_T, _GL_W, _KINK_T, _KINK_W, _FAR_T, _FAR_W,
+                           FAR_SPANS, N.pressure_arguments())
+    cum = np.concatenate(([0.0], np.cumsum(part)))  # at bounds
+    return cum[np.concatenate(([0], np.searchsorted(pts, inner) + 1, [bounds.size - 1]))]
 
 
 @numba.njit(cache=True)
