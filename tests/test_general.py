@@ -1112,6 +1112,9 @@ def test_an_edge_whose_margin_does_not_grow_is_put_between_the_cells():
     left, right, placement = general_module._run_edges(x, q, cap, status, N, 1.0, 3, 12)
     assert right == pytest.approx(x[12] + 0.5, abs=1e-12)
     assert placement == 0.5
+    # each side's placement (since 0.4.6, for the windows' own estimate): the left edge is placed by the rule
+    assert general_module._run_edges(x, q, cap, status, N, 1.0, 3, 12, side=0)[2] == 0.0
+    assert general_module._run_edges(x, q, cap, status, N, 1.0, 3, 12, side=1)[2] == 0.5
 
 
 #: How well EDGE_RULE places the stick edges of J1 and J2 away from the contact edges, in cells: measured

@@ -32,8 +32,12 @@ benchmarks/bench_edge_windows.py, docs/benchmarks.md): the rounded punch's rando
 percentile of the vouched stick edges 2.7e-4 -> 9.6e-5 of the width (Hertz 6.1e-5 -> 6.0e-5: set inside the
 contact), 2.6 -> 4.9 ms a step; the dovetail (every step marched) at 1000 nodes against 16000, 95th percentile
 2.1e-4 -> 6.1e-5, 0.54 -> 1.02 ms a step (its largest, 3.4e-3, is the load maximum's ill-conditioned band, which
-they leave as it is), dissipation per cycle 0.31 % -> 0.06 % off (against 16000 nodes). A window's edge far from
-the lattice's says so: the step's error estimate is at least their distance.
+they leave as it is), dissipation per cycle 0.31 % -> 0.06 % off (against 16000 nodes).
+
+The estimate: where both outermost stick points are the windows' (and bound the lattice's widest stick interval),
+the step's error estimate is the windows' own (:meth:`EdgeWindows._own_error`: each edge's distance from the
+lattice's, its placement on the fine cells, the floor of a fine cell); elsewhere the lattice's, at least the
+windows' distance from it. Either way a window's edge far from the lattice's says so.
 """
 from __future__ import annotations
 
@@ -145,22 +149,25 @@ class EdgeWindows:
         self.solved = self.failed = 0
 
     # -- one take ---------------------------------------------------------------------------------------------
-    def solve(self, state, loads1, ctx, fine) -> tuple[tuple, list]:
-        """The windows after the fine take ``fine`` from ``state`` (``ctx`` its _Context): (windows, edges) with
-        edges [left, right] the outermost stick points, the lattice's where a window has none of its own."""
-        windows, edges = [], [fine.stick[0], fine.stick[1]]
+    def solve(self, state, loads1, ctx, fine) -> tuple[tuple, list, list]:
+        """The windows after the fine take ``fine`` from ``state`` (``ctx`` its _Context): (windows, edges, errors)
+        with edges [left, right] the outermost stick points, the lattice's where a window has none of its own,
+        and errors [left, right] how far each window's own edge may be from the converged one [m] (:meth:`_own_error`;
+        None where the edge is the lattice's)."""
+        windows, edges, errors = [], [fine.stick[0], fine.stick[1]], [None, None]
         for s, side in enumerate((-1, 1)):
             got = self._window(state, loads1, ctx, fine, side)
             if got is not None:
-                window, edge = got
+                window, edge, error = got
                 windows.append(window)
                 if edge is not None:
-                    edges[s] = edge
-        return tuple(windows), edges
+                    edges[s], errors[s] = edge, error
+        return tuple(windows), edges, errors
 
     def _window(self, state, loads1, ctx, fine, side):
         """The window at the left (side -1) or right contact edge after the take ``fine``: (its EdgeWindow, its
-        outermost stick point or None), None where the contact is too small or new."""
+        outermost stick point or None, that point's own error estimate [m] or None), None where the contact is
+        too small or new."""
         S, R, WC = self.solver, self.refine, self.cells
         h, N1, m1, mem0 = ctx.h, ctx.N1, fine.memory, state.memory
         n, N0 = m1.q.size, mem0.normal
@@ -190,22 +197,26 @@ class EdgeWindows:
         self.solved += 1
         q, c, status, converged = _active_set(tf, gout, lock, qmax, force, hf, status, qtol, stol,
                                               WINDOW_ITERATIONS)
-        spent, G = self._slip(state, fine, side, converged, status, q, c, gout, lock, cap, old, j0, xf, tf, lo, hi)
+        # each fine cell's slip in the take: its displacement less its lock (0 where it sticks)
+        slip = np.where(status != 0, gout + c - _fine_products(tf, j0, nf, j0, q) - lock, 0.0)
+        spent, G = self._slip(state, fine, side, converged, status, slip, cap, old, j0, xf, lo, hi)
         for a in (q, cap, status, G):
             a.flags.writeable = False
         window = EdgeWindow(side, j0, hf, q, cap, status, G, lo, hi, float(fine.stick[(side + 1) // 2]), spent)
         if not converged:
             self.failed += 1
-            return window, None
-        edge = self._edge(xf, hf, status, q, qmax, state, loads1, ctx, fine, side)
+            return window, None, None
+        edge, reach = self._edge(xf, hf, status, q, qmax, slip, qtol, stol, state, loads1, ctx, fine, side)
         if edge is not None:
             inner = (m1.first + hi) * h if side < 0 else (m1.first + lo) * h
             if side * (inner - edge) > -BUFFER * h:  # within BUFFER cells of the inner end: the lattice's
-                edge = None
-        return window, edge
+                return window, None, None
+        if edge is None:
+            return window, None, None
+        return window, edge, self._own_error(edge, reach, hf, fine, side)
 
     # -- the parts ------------------------------------------------------------------------------------------
-    def _slip(self, state, fine, side, converged, status, q, c, gout, lock, cap, old, j0, xf, tf, lo, hi):
+    def _slip(self, state, fine, side, converged, status, slip, cap, old, j0, xf, lo, hi):
         """(what the window changes the take's dissipation by, the slip accumulated at its fine cells): its fine
         cells' slip in the take (their displacement less their lock, 0 where stuck) added to the slip before it
         (the lattice's as it reads there, the old windows' own where they had the cell), and their f (cap0 +
@@ -219,7 +230,6 @@ class EdgeWindows:
         if not converged or np.any(cut):
             return 0.0, np.interp(xf, m1.x, m1.G)
         N0 = mem0.normal
-        slip = np.where(status != 0, gout + c - _fine_products(tf, j0, nf, j0, q) - lock, 0.0)
         cap0 = self._start_loads(N0, hf, j0, j0 + nf - 1, side, R * m1.first, R * (m1.first + m1.q.size) - 1)
         moved = status != 0
         spent = S.f * hf * float(np.sum(0.5 * (cap0[moved] + cap[moved]) * np.abs(slip[moved])))
@@ -348,14 +358,17 @@ class EdgeWindows:
         out[arrived] = inc
         return out
 
-    def _edge(self, xf, hf, status, q, qmax, state, loads1, ctx, fine, side):
-        """The window's outermost stick point on its side (None: no stick cell); (S1) as the lattice's take
-        found it (``fine.slipping``), its drives where an edge slips."""
+    def _edge(self, xf, hf, status, q, qmax, slip, qtol, stol, state, loads1, ctx, fine, side):
+        """The window's outermost stick point on its side and how far from it, in fine cells, its placement on
+        the fine cells may leave it (_run_edges' placement, and _undecided_reach's for cells its active set left
+        undecided at its tolerances ``qtol`` and ``stol``; ``slip`` the fine cells' slip in the take): (None, 0)
+        where no cell sticks. (S1) as the lattice's take found it (``fine.slipping``), its drives where an edge
+        slips."""
         G, S = self.G, self.solver
         N1, nf = ctx.N1, xf.size
         stuck = np.flatnonzero(status == 0)
         if stuck.size == 0:
-            return None
+            return None, 0.0
         slipping = fine.slipping
         drives = None
         if any(slipping):
@@ -375,9 +388,29 @@ class EdgeWindows:
         caps = pad(qmax, qmax[-1 if side < 0 else 0])
         if side > 0:
             i, k = i + 1, k + 1
-        left, right, _ = G._run_edges(xs, qs, caps, st, N1, hf, i, k,
-                                      (slipping[0], False) if side < 0 else (False, slipping[1]), drives)
-        return left if side < 0 else right
+        one_side = (slipping[0], False) if side < 0 else (False, slipping[1])
+        at = (side + 1) // 2
+        left, right, placement = G._run_edges(xs, qs, caps, st, N1, hf, i, k, one_side, drives, at)
+        edge = left if side < 0 else right
+        # (the padded cell slips: its slip is no undecided band's)
+        undecided = G._undecided_reach(xs, qs, caps, pad(slip, math.inf), st, N1, hf, i, k, one_side, drives,
+                                       (left, right), qtol, stol, (at,))
+        return edge, max(placement, undecided)
+
+    def _own_error(self, edge, reach, hf, fine, side):
+        """How far the window's edge ``edge`` may be from the converged one [m]: the larger of its distance from
+        the lattice's edge, its placement on the fine cells (``reach`` fine cells, _run_edges' placement and the
+        undecided bands) and the placement floor EDGE_PLACEMENT of a fine cell (the two can agree by chance).
+
+        The distance is not divided by REFINE - 1, as Richardson's estimate of the finer of two first-order
+        solutions would be: the window is not always the better one (an arrived fine cell that sticks as an
+        island at the contact edge, a take's time step they share), and only their whole distance says so
+        (measured on the random histories at 1024 nodes: a Hertz step 2.9e-4 of the width off where the
+        lattice was exact, covered by the distance, not by a third of it)."""
+        G = self.G
+        apart = abs(edge - fine.stick[(side + 1) // 2])
+        floor = G.EDGE_PLACEMENT * hf if fine.regime == G.Regime.PARTIAL_SLIP else 0.0
+        return max(apart, reach * hf, floor)
 
 
 def same_windows(a: tuple, b: tuple) -> bool:

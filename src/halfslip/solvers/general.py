@@ -504,7 +504,7 @@ class GeneralSolver(TangentialSolver):
                                            ctx.N1 if last else None)
             if shadow is not None:
                 shadow_from = sub
-                spread = max(spread, apart)
+            spread = max(spread, apart)  # (0 from a sub-step the shadow waits in, unless the windows set it)
             reports.append(rep)
         last = reports[-1]
         # the gross-sliding and separation messages speak of the step's end loads (a sub-step may slide or be
@@ -564,7 +564,7 @@ class GeneralSolver(TangentialSolver):
         """One step, not subdivided; ``shadow`` the shadow lattice's take to ``loads1`` (an _Outcome) or the
         loads its memory is at, from which it then takes it (None: the shadow waits); ``normal`` the normal
         solution at ``loads1`` where the caller has it. Returns the state, the report and how far apart the
-        two lattices' widest stick intervals are (/ W)."""
+        two lattices' widest stick intervals are (/ W; the windows' own estimate where they give it, _finish)."""
         loads0 = state.loads
         mem = state.memory
         if loads1 == loads0:
@@ -625,7 +625,8 @@ class GeneralSolver(TangentialSolver):
                 rough: "_Outcome | None") -> tuple[ContactState, StepReport, float]:
         """The error estimate against the shadow lattice's take ``rough`` to the same end (None: no estimate,
         the shadow memory stays), the new state and report, and the distance of the two lattices' widest stick
-        intervals (/ W; 0 without the shadow).
+        intervals (/ W; 0 without the shadow; with windows that give both outermost stick points of the lattice's
+        widest interval, their own estimate, with or without the shadow).
 
         The estimate of the state is the distance of the two lattices' outermost
         stick points. A sub-stepped step reports the larger of it and the
@@ -661,11 +662,19 @@ class GeneralSolver(TangentialSolver):
                 error = max(error if math.isfinite(error) else 0.0, reach / W)
         windows, edges = (), fine.stick
         if self.windows is not None and fine.regime in (Regime.PARTIAL_SLIP, Regime.STICK):
-            windows, edges = self.windows.solve(state, loads1, ctx, fine)
-            # a window's edge far from the lattice's must not look right: the estimate covers their distance
-            apart = max((abs(u - v) for u, v in zip(edges, fine.stick) if math.isfinite(u - v)), default=0.0) / W
-            if apart > 0.0:
-                error = max(error if math.isfinite(error) else 0.0, apart)
+            windows, edges, own = self.windows.solve(state, loads1, ctx, fine)
+            if self.estimate and None not in own and fine.widest == fine.stick:
+                # both outermost stick points are the windows' and the lattice's widest stick interval is the one
+                # they bound: the estimate is theirs (each at least its distance from the lattice's edge,
+                # EdgeWindows._own_error) and (S1)'s doubts, and so is the spread over sub-steps (step), in place
+                # of the lattices' (their cells' placement is what the windows refine)
+                error = spread = max(max(own), _unresolved_reach(fine.slipping, fine.memory.status, h)) / W
+            else:
+                # a window's edge far from the lattice's must not look right: the estimate covers their distance
+                apart = max((abs(u - v) for u, v in zip(edges, fine.stick) if math.isfinite(u - v)),
+                            default=0.0) / W
+                if apart > 0.0:
+                    error = max(error if math.isfinite(error) else 0.0, apart)
         m = fine.memory  # (dataclasses.replace, which took 10 us of a take)
         memory = GeneralMemory(m.normal, m.spacing, m.first, m.status, m.q, m.g, m.G, m.capacity, m.shift, error,
                                coarse, windows)
@@ -1773,11 +1782,11 @@ def _settled(delta, Tq, sigma_term, glock, status, q, qmax, cap0, cap, f, G0):  
 
 
 def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
-               slipping=(False, False), drives=None) -> tuple[float, float, float]:
+               slipping=(False, False), drives=None, side: int | None = None) -> tuple[float, float, float]:
     """Edges of the stick run of cells i..k (the outermost stick points for the first and last stuck
     cells), within the cell, and how far either may be from where it is put, in cells, where that is
     more than EDGE_PLACEMENT (SUBCELL_PLACEMENT at a contact edge, half a cell for a bracketed edge,
-    below; 0 otherwise).
+    below; 0 otherwise); ``side`` 0 or 1: how far the left or the right one may be (None: either).
 
     Inside the contact the traction margin f cap - s q vanishes like the square root of the distance to
     the edge, and where the lattice puts the edge for that is its own response, EDGE_RULE (since 0.3.7):
@@ -1808,11 +1817,11 @@ def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
     (since 0.3.7: J1 at 256 nodes with the contact edge anywhere in its cell, largest error 0.085 / 0.055
     of a cell against 0.20 before; the random Hertz histories at 1024 nodes 95th percentile 1.1e-4 ->
     7.3e-5 of the width, the punch's 2.1e-4 -> 1.9e-4)."""
-    left, right, placement = _run_edges_kernel(x, q, qmax, status, float(N.left), float(N.right), h, i, k,
-                                               bool(slipping[0]), bool(slipping[1]), drives is not None,
-                                               _NO_DRIVES if drives is None else np.array(drives, dtype=float),
-                                               _END_RULES[True], _END_RULES[False])
-    return left, right, placement
+    left, right, placements = _run_edges_kernel(x, q, qmax, status, float(N.left), float(N.right), h, i, k,
+                                                bool(slipping[0]), bool(slipping[1]), drives is not None,
+                                                _NO_DRIVES if drives is None else np.array(drives, dtype=float),
+                                                _END_RULES[True], _END_RULES[False])
+    return left, right, float(placements.max() if side is None else placements[side])
 
 
 @numba.njit(cache=True)
@@ -1820,9 +1829,10 @@ def _run_edges_kernel(x, q, qmax, status, left, right, h, i, k, open_left, open_
                       within_rule, end_rule):  # pragma: no cover - compiled
     """_run_edges, compiled (since 0.4.4; the same operations): the contact's edges, (S1)'s ``open_left`` and
     ``open_right`` and, where ``driven``, its ``drives`` ((2, 2): (u / f, v) at each edge); the end rules
-    END_RULE_WITHIN and END_RULE_END as arrays (benchmarks/calibrate_edge_rule.py sets them to zero)."""
+    END_RULE_WITHIN and END_RULE_END as arrays (benchmarks/calibrate_edge_rule.py sets them to zero). The
+    placement is each side's (since 0.4.6)."""
     out = np.empty(2)
-    placement = 0.0
+    placement = np.zeros(2)  # (each side's)
     for side in range(2):
         end, step, edge, open_ = (i, 1, left, open_left) if side == 0 else (k, -1, right, open_right)
         nb = end - step
@@ -1863,7 +1873,7 @@ def _run_edges_kernel(x, q, qmax, status, left, right, h, i, k, open_left, open_
             w_est, u_e = w / h, u0 / h - (0.0 if within else 1.0)
             w += h * _polyval2d(w_est, u_e, within_rule if within else end_rule)
             out[side] = edge + step * min(max(w, lower), u0 + EDGE_INSIDE * h)
-            placement = max(placement, SUBCELL_PLACEMENT)
+            placement[side] = max(placement[side], SUBCELL_PLACEMENT)
             continue
         # the traction margin f cap - |q| vanishes like the square root of the distance to the stick edge,
         # and the lattice's response to that is EDGE_RULE
@@ -1879,13 +1889,13 @@ def _run_edges_kernel(x, q, qmax, status, left, right, h, i, k, open_left, open_
             far = inner + step
             if 2 * abs(far - end) <= k - i and status[far] == 0 and qmax[far] > 0:  # (the run's near half)
                 if (max(1.0 - sgn * q[far] / qmax[far], 0.0) * qmax[far]) ** 2 < m1:
-                    placement = max(placement, 0.5)
+                    placement[side] = max(placement[side], 0.5)
         else:
             # the margin does not grow inwards as the square root would (an ill-conditioned band of cells
             # near their bound, or a margin left by an earlier slip): the edge lies between the two
             # centres, and their midpoint is at most half a cell from it
             frac = 0.5
-            placement = max(placement, 0.5)
+            placement[side] = max(placement[side], 0.5)
         out[side] = x[end] - step * frac * h
     return out[0], out[1], placement
 
@@ -1958,15 +1968,18 @@ def _undecided_band(q, qmax, s, status, end: int, step: int, qtol: float, stol: 
     return stuck, slipping
 
 
-def _undecided_reach(x, q, qmax, s, status, N, h, i, k, slipping, drives, edges, qtol, stol) -> float:
+def _undecided_reach(x, q, qmax, s, status, N, h, i, k, slipping, drives, edges, qtol, stol,
+                     sides=(0, 1)) -> float:
     """How far, in cells, the outermost stick edges (``edges``, of the stick cells i..k) may be from where
     they are put because the active set left cells beside them undecided (:func:`_undecided_band`): the
     edge lies anywhere between where the pattern with those cells slipping puts it and where the pattern
     with them stuck does (_run_edges on each), and the reach is the farther one's distance plus the
     placement floor EDGE_PLACEMENT of that edge (the span of the stick cells where every one of them is
-    undecided). 0 where there are none."""
+    undecided). 0 where there are none. ``sides``: the edges to look at (0 the left one, 1 the right)."""
     reach = 0.0
     for side, (end, step) in enumerate(((i, -1), (k, 1))):
+        if side not in sides:
+            continue
         stuck, free = _undecided_band(q, qmax, s, status, end, step, qtol, stol)
         for count, now in ((stuck, 0), (free, 1)):
             if count == 0:
