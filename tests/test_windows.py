@@ -809,3 +809,33 @@ def test_tractions_with_windows_carry_the_shear_force():
             F * state.loads.P)
         assert np.all(np.abs(q) <= F * p * (1 + 1e-9))
     assert seen >= 10
+
+
+@pytest.mark.parametrize("kind,nodes", [("punch", 512), ("hertz", 256), ("hertz", 512)])
+def test_a_window_beyond_its_reach_is_not_solved_and_nothing_changes(kind, nodes):
+    """A window whose lattice cells all slip with the lattice's stick edge beyond its reach is put at its bounds
+    instead of solved (EdgeWindows._slipping, REACH_MARGIN): on the J1/J2 walk (Q to 0.6 f P and back) 52 / 76 /
+    100 of 124 / 136 / 136 window solves skipped, and every step's stick edges, dissipation and error estimate
+    are those of solving every window to the last bit, the windows' fine shear to rounding (the solve puts those
+    cells at their bounds too)."""
+    import halfslip.solvers._windows as windows_module
+
+    skipping = solver_of(kind, nodes)
+    skipped = march(skipping, J_PATH)
+    every = solver_of(kind, nodes)
+    margin = windows_module.REACH_MARGIN
+    windows_module.REACH_MARGIN = math.inf
+    try:
+        solved = march(every, J_PATH)
+    finally:
+        windows_module.REACH_MARGIN = margin
+    assert every.windows.skipped == 0 and skipping.windows.skipped >= 40
+    assert skipping.windows.solved + skipping.windows.skipped == every.windows.solved
+    for (a, ra), (b, rb) in zip(skipped, solved):
+        assert (a.stick_left, a.stick_right, a.dissipation) == (b.stick_left, b.stick_right, b.dissipation)
+        assert ra.error_estimate == rb.error_estimate or (math.isnan(ra.error_estimate)
+                                                          and math.isnan(rb.error_estimate))
+        assert len(a.memory.windows) == len(b.memory.windows)
+        for u, v in zip(a.memory.windows, b.memory.windows):
+            # (the solve's shear to rounding: a cell it holds at its bound by equilibrium, 2e-14 of it apart)
+            assert u.first == v.first and np.allclose(u.q, v.q, rtol=0.0, atol=1e-12 * np.max(np.abs(v.q)))
