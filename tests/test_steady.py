@@ -181,29 +181,41 @@ def test_rounded_punch_with_moment_and_tension_ss1_equals_marching():
     assert float(last.contact_right.min()) - right > 2e-3 * width
 
 
-def test_general_solver_skips_steady_cycles_like_full_marching():
+@pytest.mark.parametrize("windows", [False, True])
+def test_general_solver_skips_steady_cycles_like_full_marching(windows):
     """Skipping by the general solver's same_state changes the results by less than its tolerance.
 
     The states one cycle apart agree to SAME_STATE_TOL (1e-8 of f max p in q and of
     A f max p W in the locked displacements, on the same cells): the active-set
-    pattern repeats, so the skipped run's last stored cycle agrees with the fully
-    marched one to rounding in the stick edges (asserted to 1e-9 of the width) and
-    in its dissipation per cycle (1e-9).
+    pattern repeats, so without the edge windows the skipped run's last stored cycle
+    agrees with the fully marched one to rounding in the stick edges (asserted to
+    1e-9 of the width) and in its dissipation per cycle (1e-9). With them (the
+    default since 0.4.6) their shear is not compared (it creeps by about 4e-6 of f
+    max p a cycle, docs/general_solver.md): the edges agree to the cycle tolerance,
+    1e-3 of a cell (measured 7.3e-4 of a cell, 128 nodes, 7 of 10 cycles skipped),
+    the dissipation to 1e-5 (measured 3.0e-6 per cycle, 2.3e-6 in total).
     """
+    import dataclasses
+
     from halfslip import post
 
-    skipped = hs.simulate(punch_scene(count=10, skip=True))
-    full = hs.simulate(punch_scene(count=10, skip=False))
+    def scene(skip):
+        s = punch_scene(count=10, skip=skip)
+        return dataclasses.replace(s, solver=dataclasses.replace(s.solver, edge_windows=windows))
+
+    skipped = hs.simulate(scene(True))
+    full = hs.simulate(scene(False))
     assert full.attrs["skipped_cycles"] == 0 and skipped.attrs["skipped_cycles"] >= 3
     assert skipped.attrs["count_steps"] < full.attrs["count_steps"]
     last = full.isel(t=slice(-20, None))
     width = float(last.contact_right.min() - last.contact_left.max())
+    edges, energy = (1e-3 * width / 128, 1e-5) if windows else (1e-9 * width, 1e-9)
     for a, b in zip(marched_permanent_stick(skipped, 20), marched_permanent_stick(full, 20)):
-        assert abs(a - b) < 1e-9 * width
+        assert abs(a - b) < edges
     d_skip = post.dissipation_per_cycle(skipped).dissipation.values
     d_full = post.dissipation_per_cycle(full).dissipation.values
-    assert d_skip[-1] == pytest.approx(d_full[-1], rel=1e-9)
-    assert float(skipped.final_dissipation) == pytest.approx(float(full.dissipation[-1]), rel=1e-9)
+    assert d_skip[-1] == pytest.approx(d_full[-1], rel=energy)
+    assert float(skipped.final_dissipation) == pytest.approx(float(full.dissipation[-1]), rel=energy)
 
 
 def test_general_state_difference_tells_a_first_cycle_from_a_steady_one():

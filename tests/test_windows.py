@@ -523,12 +523,12 @@ SCENE = helpers.MINIMAL_SCENE + "solver:\n  method: general\n  edge_windows: %s\
 
 
 def test_scene_option_edge_windows():
-    """solver.edge_windows: true / false parse (default false); 1 and the string "yes" are refused with an error
-    naming the field and its line."""
+    """solver.edge_windows: true / false parse (default true since 0.4.6, false in 0.4.5); 1 and the string "yes"
+    are refused with an error naming the field and its line."""
     assert hs.parse_scene(SCENE % "true").solver.edge_windows is True
     assert hs.parse_scene(SCENE % "false").solver.edge_windows is False
-    assert hs.parse_scene(SCENE.replace("  edge_windows: %s\n", "")).solver.edge_windows is False
-    assert hs.SolverOptions().edge_windows is False
+    assert hs.parse_scene(SCENE.replace("  edge_windows: %s\n", "")).solver.edge_windows is True
+    assert hs.SolverOptions().edge_windows is True
     for bad in ("1", '"yes"'):
         with pytest.raises(HalfslipInputError) as error:
             hs.parse_scene(SCENE % bad, path="inline.yaml")
@@ -541,7 +541,8 @@ def test_scene_option_edge_windows():
 
 
 def test_validate_prints_edge_windows(cli, tmp_path):
-    """``halfslip validate`` names edge_windows on the solver line when it is set, and not otherwise."""
+    """``halfslip validate`` names edge_windows on the solver line when it is off (the default is on since 0.4.6),
+    and not otherwise."""
     lines = {}
     for value in ("true", "false"):
         path = tmp_path / f"{value}.yaml"
@@ -549,9 +550,9 @@ def test_validate_prints_edge_windows(cli, tmp_path):
         result = cli("validate", path)
         assert result.exit_code == 0, result.output
         (lines[value],) = [line for line in result.stdout.splitlines() if line.startswith("solver")]
-    assert lines["true"].endswith(", edge_windows = true"), lines["true"]
-    assert "edge_windows" not in lines["false"]
-    assert lines["true"].replace(", edge_windows = true", "") == lines["false"]
+    assert lines["false"].endswith(", edge_windows = false"), lines["false"]
+    assert "edge_windows" not in lines["true"]
+    assert lines["false"].replace(", edge_windows = false", "") == lines["true"]
 
 
 # =============================================================================
@@ -563,7 +564,7 @@ def dovetail_text(windows, nodes=None):
     return helpers.example_text("dovetail", **{
         "count: 20": "count: 6", "steps_per_cycle: 100": "steps_per_cycle: 40",
         "fields: [p, q, slip]": "fields: [p, q]",
-        "skip_steady_cycles: true": "skip_steady_cycles: true" + ("\n  edge_windows: true" if windows else "")
+        "skip_steady_cycles: true": "skip_steady_cycles: true" + f"\n  edge_windows: {str(windows).lower()}"
         + (f"\n  nodes: {nodes}" if nodes else "")})
 
 

@@ -187,7 +187,7 @@ def describe_scene(scene: Scene) -> list[str]:
         f"solver     method = {solver.method}, tol = {solver.tol:g}, nodes = {solver.nodes}, "
         f"skip_steady_cycles = {str(solver.skip_steady_cycles).lower()}"
         + ("" if solver.edge_travel is None else f", edge_travel = {solver.edge_travel:g}")
-        + (", edge_windows = true" if solver.edge_windows else ""),
+        + ("" if solver.edge_windows else ", edge_windows = false"),
         f"output     fields = [{', '.join(output.fields)}], every = {output.every}, points = {output.points}",
         "",
     ]

@@ -87,7 +87,8 @@ class SolverOptions:
     edge_windows : bool
         Solve the first and last cells of the contact again on cells four
         times finer at every take of the general solver, for its outermost
-        stick points (halfslip.solvers._windows; default false).
+        stick points, the slip and the dissipation there
+        (halfslip.solvers._windows; default true since 0.4.6, false before).
     """
 
     method: str = "auto"
@@ -95,7 +96,7 @@ class SolverOptions:
     skip_steady_cycles: bool = True
     edge_travel: float | None = None
     tol: float = 1e-4
-    edge_windows: bool = False
+    edge_windows: bool = True
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "method", check_choice(self.method, "solver.method", METHODS))

@@ -217,6 +217,13 @@ class EdgeWindows:
         if not converged:
             self.failed += 1
             return window, None, None
+        if fine.undecided[(side + 1) // 2] > 0.0:
+            # the lattice left cells beside its edge undecided (at their bound, not slipping: a load extreme): the
+            # edge lies anywhere across them, and the window, whose cells are as near their bounds, picks one end
+            # of that band by its coupling to the lattice as much as by its cells (a rounded punch's SS1 cycle at
+            # 1024 nodes: 4 cells farther in than the lattice's edge and SS1's); the lattice's edge and estimate
+            # stand, which say so
+            return window, None, None
         edge, reach = self._edge(xf, hf, status, q, qmax, slip, qtol, stol, state, loads1, ctx, fine, side)
         if edge is not None:
             inner = (m1.first + hi) * h if side < 0 else (m1.first + lo) * h

@@ -344,6 +344,7 @@ class _Outcome:
     placement: float = 0.0  # how far, in cells, the placement rule puts the outermost / widest edges at most (_run_edges)
     slip: np.ndarray | None = None  # each cell's slip in the take and its load at the take's start (the fine take's,
     cap0: np.ndarray | None = None  # with edge_windows: the windows take the dissipation of the cells they cover)
+    undecided: tuple = (0.0, 0.0)  # with edge_windows: _undecided_reach at the outermost left / right stick edge
 
 
 class GeneralSolver(TangentialSolver):
@@ -802,6 +803,7 @@ class GeneralSolver(TangentialSolver):
         slipping = _slipping_edges(drives, loads0, loads1, f) if drives is not None else (False, False)
         drives = tuple((u / f, v) for u, v in drives) if any(slipping) else None
         placement = 0.0
+        undecided = (0.0, 0.0)
         if slipped == 0:
             regime, edges = Regime.STICK, (N1.left, N1.right)
             if any(slipping):
@@ -820,17 +822,21 @@ class GeneralSolver(TangentialSolver):
             *edges, placement = _run_edges(x, q, qmax, status, N1, h, runs[0][0], runs[-1][1] - 1, slipping,
                                           drives)
             edges = tuple(edges)
-            # cells beside the edges that are as much stuck as slipping (at the bound, not slipping)
-            placement = max(placement, _undecided_reach(x, q, qmax, s, status, N1, h, runs[0][0], runs[-1][1] - 1,
-                                                        slipping, drives, edges,
-                                                        *tolerances))
+            # cells beside the edges that are as much stuck as slipping (at the bound, not slipping); each side's
+            # for the windows (whose edge does not replace an undecided one: EdgeWindows._window)
+            by_side = self.windows is not None and not shadow
+            reaches = [_undecided_reach(x, q, qmax, s, status, N1, h, runs[0][0], runs[-1][1] - 1, slipping, drives,
+                                        edges, *tolerances, sides=k) for k in (((0,), (1,)) if by_side else ((0, 1),))]
+            placement = max(placement, *reaches)
+            if by_side:
+                undecided = tuple(reaches)
             a, b = max(runs, key=lambda r: r[1] - r[0])
             if len(runs) == 1:
                 widest = edges
             else:  # the estimate covers the widest interval too (its spread over sub-steps, _finish)
                 *widest, inner = _run_edges(x, q, qmax, status, N1, h, a, b - 1, slipping, drives)
                 widest, placement = tuple(widest), max(placement, inner)
-        kept = (s, cap0) if self.windows is not None and not shadow else (None, None)
+        kept = (s, cap0, undecided) if self.windows is not None and not shadow else (None, None, (0.0, 0.0))
         return _Outcome(memory, shift, dissipation, edges, widest, regime, slipped > 0, iterations, residual,
                         message, slipping, placement, *kept)
 
