@@ -1392,6 +1392,62 @@ def test_random_ramps_punch(path, nodes, whole):
     run_random("punch", nodes, path, whole)
 
 
+def check_windows(prev, state, report):
+    """The edge windows' invariants at one step (the default of a scene since 0.4.6; the lattice's own are
+    check_step's, which the windows leave as they are): each window within its bounds (|q| <= f cap, to 1e-9 of
+    the largest), the force the lattice's cells outside the windows and the windows' fine cells carry together
+    equal to the lattice's, h sum q = Q (the window carries the force of the cells it stands in for: its
+    equality, to the active set's rounding, 1e-9 of f P), the outermost stick points inside the contact and
+    each window's edge within the step's error estimate of the lattice's edge (EdgeWindow.lattice_edge)."""
+    mem = state.memory
+    if mem.normal is None or not mem.windows:
+        return
+    h, P = mem.spacing, state.loads.P
+    W = state.contact_right - state.contact_left
+    lattice = h * float(np.sum(mem.q))
+    covered = np.zeros(mem.q.size, bool)
+    windows = 0.0
+    for w in mem.windows:
+        assert np.all(np.abs(w.q) <= F * w.capacity + 1e-9 * F * float(np.max(w.capacity)))
+        covered[w.lo:w.hi] = True
+        windows += w.spacing * float(np.sum(w.q))
+        edge = state.stick_left if w.side < 0 else state.stick_right
+        if math.isfinite(edge):
+            assert abs(edge - w.lattice_edge) <= report.error_estimate * W * (1 + 1e-12) + 1e-15 * W
+    assert abs(h * float(np.sum(mem.q[~covered])) + windows - lattice) <= 1e-9 * F * P
+    if math.isfinite(state.stick_left):
+        assert state.contact_left <= state.stick_left <= state.stick_right <= state.contact_right
+    # the regime says what the windows and the lattice outside them report (GeneralSolver._finish)
+    slipping = (any(np.any(w.status) for w in mem.windows) or bool(np.any(mem.status[~covered]))
+                or (state.stick_left, state.stick_right) != (state.contact_left, state.contact_right))
+    if report.regime in (Regime.STICK, Regime.PARTIAL_SLIP):
+        assert (report.regime == Regime.PARTIAL_SLIP) == slipping
+
+
+@RANDOM
+@given(path=st.one_of(hertz_histories().map(lambda p: ("hertz", p)), punch_histories().map(lambda p: ("punch", p))),
+       nodes=st.sampled_from([64, 128, 256]))
+def test_random_ramps_with_edge_windows(path, nodes):
+    """Random ramp histories on both profiles with the edge windows: every step converged, dissipation
+    non-decreasing, the lattice's state that of the run without windows (bitwise: every cell's q, status and
+    slip; check_step holds for it) and the windows' invariants (check_windows). check_step itself reads the
+    reported edges and q(x), which are the windows' near the contact edges."""
+    kind, path = path
+    _, plain = make(kind, nodes)
+    _, solver = make(kind, nodes, edge_windows=True)
+    bare = state = solver.initial_state()
+    for i, loads in enumerate(path):
+        prev, before = state, bare
+        bare, bare_report = plain.step(bare, i + 1.0, Loads(*loads))
+        state, report = solver.step(state, i + 1.0, Loads(*loads))
+        check_step(plain, before, bare, bare_report)
+        assert report.converged and state.dissipation >= prev.dissipation
+        m0, m1 = bare.memory, state.memory
+        assert m0.first == m1.first and np.array_equal(m0.q, m1.q) and np.array_equal(m0.status, m1.status)
+        assert np.array_equal(m0.G, m1.G)
+        check_windows(prev, state, report)
+
+
 @pytest.mark.slow
 @settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(path=st.one_of(hertz_histories().map(lambda p: ("hertz", p)), punch_histories().map(lambda p: ("punch", p))),

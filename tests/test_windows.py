@@ -596,6 +596,7 @@ def test_dovetail_with_windows_end_to_end():
     shear ``q`` and the station states are not compared: on the windows' cells they are the windows' (4fe595a)."""
     plain, ds = dovetail(False), dovetail(True)
     assert ds.attrs["method"] == "general" and ds.attrs["complete"] == 1
+    assert (ds.attrs["solver_edge_windows"], plain.attrs["solver_edge_windows"]) == (1, 0)
     assert ds.attrs["count_failed_steps"] == 0 and bool(np.all(ds["converged"].values == 1))
     assert ds.attrs["skipped_cycles"] > 0
     per_cycle = [run.halfslip.dissipation_per_cycle()["dissipation"].values[-1]

@@ -577,6 +577,7 @@ class _Run:
         if self.name == "general":
             ds.attrs["solver_tol"] = scene.solver.tol
             ds.attrs["solver_nodes"] = scene.solver.nodes
+            ds.attrs["solver_edge_windows"] = int(scene.solver.edge_windows)
             spacings = slip_zone_spacings(ds, scene.solver.nodes)
             ds.attrs["widest_slip_zone_spacings"] = spacings
             if 0.0 < resolving_spacings(spacings, scene.solver.edge_windows, scene.solver.nodes) < RESOLVED_SPACINGS:

@@ -661,9 +661,10 @@ class GeneralSolver(TangentialSolver):
             reach = max(fine.placement * h, _unresolved_reach(fine.slipping, fine.memory.status, h))
             if reach > 0.0:
                 error = max(error if math.isfinite(error) else 0.0, reach / W)
-        windows, edges = (), fine.stick
+        windows, edges, regime = (), fine.stick, fine.regime
         if self.windows is not None and fine.regime in (Regime.PARTIAL_SLIP, Regime.STICK):
             windows, edges, own = self.windows.solve(state, loads1, ctx, fine)
+            regime = _windowed_regime(fine, windows, edges, N1)
             if self.estimate and None not in own and fine.widest == fine.stick:
                 # both outermost stick points are the windows' and the lattice's widest stick interval is the one
                 # they bound: the estimate is theirs (each at least its distance from the lattice's edge,
@@ -687,7 +688,7 @@ class GeneralSolver(TangentialSolver):
         if not converged:
             message = "; ".join(m for m in (message, f"active set not converged (check residual {fine.residual:.3g} "
                                                       f"x tolerance)") if m)
-        return new, StepReport(fine.regime, fine.slipped, ctx.normal_changed, message, converged=converged,
+        return new, StepReport(regime, fine.slipped, ctx.normal_changed, message, converged=converged,
                                residual=fine.residual, iterations=fine.iterations, error_estimate=error,
                                shear_error_estimate=shear), spread
 
@@ -2082,6 +2083,22 @@ def _shear_apart_kernel(first, h, q, cap, first_c, h_c, q_c, cap_c):  # pragma: 
         chi_c = q_c[J] / cap_c[J] if cap_c[J] > 0.0 else 0.0
         terms[j] = cap[j] * abs(chi - chi_c)
     return h * pairwise_sum(terms, 0, n)
+
+
+def _windowed_regime(fine: "_Outcome", windows: tuple, edges, N: NormalSolution) -> Regime:
+    """The regime of a take whose edge windows ``windows`` report the outermost stick points ``edges``: partial slip
+    where a lattice cell outside the windows slips, a window's fine cell slips or a stick point lies inside the
+    contact (a slip zone placed inside an end cell), full stick otherwise (since 0.4.6: the lattice's regime
+    with the windows' edges could say full stick beside a window's slip zone, or partial slip with the stick
+    zone the whole contact)."""
+    covered = np.zeros(fine.memory.status.size, bool)
+    for w in windows:
+        covered[w.lo:w.hi] = True
+        if np.any(w.status):
+            return Regime.PARTIAL_SLIP
+    if np.any(fine.memory.status[~covered]) or tuple(edges) != (N.left, N.right):
+        return Regime.PARTIAL_SLIP
+    return Regime.STICK
 
 
 def _at_least(estimate: float, spread: float) -> float:
