@@ -31,7 +31,7 @@ cells, its sub-steps, its estimate) is the same with or without them. Measured (
 benchmarks/bench_edge_windows.py, docs/benchmarks.md): the rounded punch's random histories at 512 nodes, 95th
 percentile of the vouched stick edges 2.7e-4 -> 9.6e-5 of the width (Hertz 6.1e-5 -> 6.0e-5: set inside the
 contact), 2.6 -> 4.9 ms a step; the dovetail (every step marched) at 1000 nodes against 16000, 95th percentile
-2.1e-4 -> 6.1e-5, 0.54 -> 1.02 ms a step (its largest, 3.4e-3, is the load maximum's ill-conditioned band, which
+2.1e-4 -> 6.1e-5, 0.57 -> 1.21 ms a step (its largest, 3.4e-3, is the load maximum's ill-conditioned band, which
 they leave as it is), dissipation per cycle 0.31 % -> 0.06 % off (against 16000 nodes).
 
 The estimate: where both outermost stick points are the windows' (and bound the lattice's widest stick interval),
@@ -192,9 +192,10 @@ class EdgeWindows:
         cap = self._loads(N1, hf, j0, j1)
         qmax = S.f * cap
         cidx = np.clip(np.arange(j0, j1 + 1) // R - (m1.first + lo), 0, WC - 1)
-        if np.all(m1.status[lo:hi]) and not abs(fine.stick[(side + 1) // 2] - (N1.left if side < 0 else N1.right)) \
-                <= (WC - BUFFER + REACH_MARGIN) * h:
-            return self._slipping(m1, side, j0, hf, cap, qmax, cidx, lo, hi, fine), None, None
+        lattice_edge = float(fine.stick[(side + 1) // 2])
+        if np.all(m1.status[lo:hi]) and not abs(lattice_edge - (N1.left if side < 0 else N1.right)) <= (
+                WC - BUFFER + REACH_MARGIN) * h:
+            return self._slipping(m1, side, j0, hf, cap, qmax, cidx, lo, hi, lattice_edge), None, None
         span = max(n, mem0.q.size) + abs(m1.first - mem0.first) + 2 * WC + 4
         tabs, span, tf = self._kernel_tables(h, span)
         gout = self._field(m1, loads1, tabs, span, tf, j0, nf, (), ((lo, hi),))
@@ -213,7 +214,7 @@ class EdgeWindows:
         spent, G = self._slip(state, fine, side, converged, status, slip, cap, old, j0, xf, lo, hi)
         for a in (q, cap, status, G):
             a.flags.writeable = False
-        window = EdgeWindow(side, j0, hf, q, cap, status, G, lo, hi, float(fine.stick[(side + 1) // 2]), spent)
+        window = EdgeWindow(side, j0, hf, q, cap, status, G, lo, hi, lattice_edge, spent)
         if not converged:
             self.failed += 1
             return window, None, None
@@ -225,16 +226,13 @@ class EdgeWindows:
             # stand, which say so
             return window, None, None
         edge, reach = self._edge(xf, hf, status, q, qmax, slip, qtol, stol, state, loads1, ctx, fine, side)
-        if edge is not None:
-            inner = (m1.first + hi) * h if side < 0 else (m1.first + lo) * h
-            if side * (inner - edge) > -BUFFER * h:  # within BUFFER cells of the inner end: the lattice's
-                return window, None, None
-        if edge is None:
+        inner = (m1.first + hi) * h if side < 0 else (m1.first + lo) * h
+        if edge is None or side * (inner - edge) > -BUFFER * h:  # (within BUFFER cells of the inner end: the lattice's)
             return window, None, None
-        return window, edge, self._own_error(edge, reach, hf, fine, side)
+        return window, edge, self._own_error(edge, reach, hf, fine, lattice_edge)
 
     # -- the parts ------------------------------------------------------------------------------------------
-    def _slipping(self, m1, side, j0, hf, cap, qmax, cidx, lo, hi, fine):
+    def _slipping(self, m1, side, j0, hf, cap, qmax, cidx, lo, hi, lattice_edge):
         """The window over lattice cells lo .. hi - 1 that all slip, the lattice's outermost stick point on its side
         beyond the window's reach (REACH_MARGIN): not solved. Its fine cells slip the way of their lattice cell at
         their bound, the history the next take's window on this side locks from (a solve's answer but where the
@@ -247,7 +245,7 @@ class EdgeWindows:
         G = np.interp((j0 + np.arange(cidx.size) + 0.5) * hf, m1.x, m1.G)
         for a in (q, cap, status, G):
             a.flags.writeable = False
-        return EdgeWindow(side, j0, hf, q, cap, status, G, lo, hi, float(fine.stick[(side + 1) // 2]), 0.0)
+        return EdgeWindow(side, j0, hf, q, cap, status, G, lo, hi, lattice_edge, 0.0)
 
     def _slip(self, state, fine, side, converged, status, slip, cap, old, j0, xf, lo, hi):
         """(what the window changes the take's dissipation by, the slip accumulated at its fine cells): its fine
@@ -430,9 +428,9 @@ class EdgeWindows:
                                        (left, right), qtol, stol, (at,))
         return edge, max(placement, undecided)
 
-    def _own_error(self, edge, reach, hf, fine, side):
+    def _own_error(self, edge, reach, hf, fine, lattice_edge):
         """How far the window's edge ``edge`` may be from the converged one [m]: the larger of its distance from
-        the lattice's edge, its placement on the fine cells (``reach`` fine cells, _run_edges' placement and the
+        the lattice's edge ``lattice_edge``, its placement on the fine cells (``reach`` fine cells, _run_edges' placement and the
         undecided bands) and the placement floor EDGE_PLACEMENT of a fine cell (the two can agree by chance).
 
         The distance is not divided by REFINE - 1, as Richardson's estimate of the finer of two first-order
@@ -441,7 +439,7 @@ class EdgeWindows:
         (measured on the random histories at 1024 nodes: a Hertz step 2.9e-4 of the width off where the
         lattice was exact, covered by the distance, not by a third of it)."""
         G = self.G
-        apart = abs(edge - fine.stick[(side + 1) // 2])
+        apart = abs(edge - lattice_edge)
         floor = G.EDGE_PLACEMENT * hf if fine.regime == G.Regime.PARTIAL_SLIP else 0.0
         return max(apart, reach * hf, floor)
 
