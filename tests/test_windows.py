@@ -476,13 +476,19 @@ def test_checkpoint_round_trip_keeps_the_windows():
     assert (back.stick_left, back.stick_right) == (state.stick_left, state.stick_right)
     first = march(solver, CONTINUE_PATH, state, t0=10.0)
     second = march(solver_of("punch", 256), CONTINUE_PATH, back, t0=10.0)
+    assert_same_marches(first, second, assert_same_window)
+
+
+def assert_same_marches(first, second, same_window):
+    """Two marches ([(state, report)]) step by step: the same stick edges, dissipation and error estimate (NaN
+    alike) to the last bit, as many windows, each pair checked by ``same_window``."""
     for (a, ra), (b, rb) in zip(first, second):
         assert (a.stick_left, a.stick_right, a.dissipation) == (b.stick_left, b.stick_right, b.dissipation)
         assert ra.error_estimate == rb.error_estimate or (math.isnan(ra.error_estimate)
                                                           and math.isnan(rb.error_estimate))
         assert len(a.memory.windows) == len(b.memory.windows)
         for u, v in zip(a.memory.windows, b.memory.windows):
-            assert_same_window(u, v)
+            same_window(u, v)
 
 
 def test_a_memory_from_before_the_windows_decodes_without_them():
@@ -833,11 +839,7 @@ def test_a_window_beyond_its_reach_is_not_solved_and_nothing_changes(kind, nodes
         windows_module.REACH_MARGIN = margin
     assert every.windows.skipped == 0 and skipping.windows.skipped >= 40
     assert skipping.windows.solved + skipping.windows.skipped == every.windows.solved
-    for (a, ra), (b, rb) in zip(skipped, solved):
-        assert (a.stick_left, a.stick_right, a.dissipation) == (b.stick_left, b.stick_right, b.dissipation)
-        assert ra.error_estimate == rb.error_estimate or (math.isnan(ra.error_estimate)
-                                                          and math.isnan(rb.error_estimate))
-        assert len(a.memory.windows) == len(b.memory.windows)
-        for u, v in zip(a.memory.windows, b.memory.windows):
-            # (the solve's shear to rounding: a cell it holds at its bound by equilibrium, 2e-14 of it apart)
-            assert u.first == v.first and np.allclose(u.q, v.q, rtol=0.0, atol=1e-12 * np.max(np.abs(v.q)))
+    def same_shear(u, v):  # (the solve's to rounding: a cell it holds at its bound by equilibrium, 2e-14 apart)
+        assert u.first == v.first and np.allclose(u.q, v.q, rtol=0.0, atol=1e-12 * np.max(np.abs(v.q)))
+
+    assert_same_marches(skipped, solved, same_shear)
