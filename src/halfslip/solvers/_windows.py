@@ -453,16 +453,29 @@ def same_windows(a: tuple, b: tuple) -> bool:
 @numba.njit(cache=True)
 def _far_field(tabs, span, R, jf0, nf, first, q):  # pragma: no cover - compiled
     """sum_j t(x_i - x_j) q_j at the fine centres i (fine indices jf0 .. jf0 + nf - 1) over the lattice's cells
-    j (from lattice index ``first``) carrying ``q``; ``tabs[m, span + k]`` = t(k h + (m + 1/2) h / R - h / 2)."""
+    j (from lattice index ``first``) carrying ``q``; ``tabs[m, span + k]`` = t(k h + (m + 1/2) h / R - h / 2).
+
+    The fine centres at the same offset m in their cells (every R-th) read consecutive entries of tabs[m]: their
+    sums run together, cell j after cell j, each in the order of j from 0 (the same operations, in the same order
+    per centre, as one sum per centre; 1.4x faster at 64 fine centres and 1000 cells)."""
     out = np.zeros(nf)
-    for i in range(nf):
-        jf = jf0 + i
-        c = jf // R
-        m = jf - c * R
-        total = 0.0
+    for offset in range(R):
+        i0 = (offset - jf0) % R  # the first fine centre with this offset
+        if i0 >= nf:
+            continue
+        c0 = (jf0 + i0) // R
+        m = jf0 + i0 - c0 * R
+        count = (nf - 1 - i0) // R + 1
+        row = tabs[m]
+        base = span + c0 - first
+        acc = np.zeros(count)
         for j in range(q.size):
-            total += tabs[m, span + c - first - j] * q[j]
-        out[i] = total
+            qj = q[j]
+            b = base - j
+            for k in range(count):
+                acc[k] += row[b + k] * qj
+        for k in range(count):
+            out[i0 + k * R] = acc[k]
     return out
 
 
