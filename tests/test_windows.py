@@ -213,6 +213,30 @@ def test_kernel_tables_are_the_kernel():
     assert again[1] == span2 and again[0] is tabs2 and again[2] is tf2
 
 
+@pytest.mark.parametrize("R", [2, 4, 5, 8])
+def test_far_field_is_the_sum_over_the_lattices_cells(R):
+    """_far_field (the fine centres at one offset in their cells summed together, since 0.4.6) is
+    sum_j tabs[m_i, span + c_i - first - j] q_j at every fine centre i (c_i, m_i its cell and offset), each sum
+    taken over j from 0 as written: to the last bit, on random tables, shear, offsets and sizes (seeded)."""
+    from halfslip.solvers._windows import _far_field
+
+    rng = np.random.default_rng(20261129 + R)
+    span = 1500
+    tabs = rng.standard_normal((R, 2 * span + 1))
+    for _ in range(12):
+        n, first, nf = int(rng.integers(1, 1100)), int(rng.integers(-50, 50)), int(rng.integers(1, 130))
+        jf0 = R * first + int(rng.integers(-3 * R, (n + 5) * R))
+        q = rng.standard_normal(n)
+        want = np.zeros(nf)
+        for i in range(nf):
+            c, m = divmod(jf0 + i, R)
+            total = 0.0
+            for j in range(n):
+                total += tabs[m, span + c - first - j] * q[j]
+            want[i] = total
+        assert np.array_equal(_far_field(tabs, span, R, jf0, nf, first, q), want)
+
+
 # =============================================================================
 # 3. the dense active set
 # =============================================================================
