@@ -195,8 +195,6 @@ def test_general_solver_skips_steady_cycles_like_full_marching(windows):
     1e-3 of a cell (measured 7.3e-4 of a cell, 128 nodes, 7 of 10 cycles skipped),
     the dissipation to 1e-5 (measured 3.0e-6 per cycle, 2.3e-6 in total).
     """
-    import dataclasses
-
     from halfslip import post
 
     def scene(skip):

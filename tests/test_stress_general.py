@@ -1392,7 +1392,7 @@ def test_random_ramps_punch(path, nodes, whole):
     run_random("punch", nodes, path, whole)
 
 
-def check_windows(prev, state, report):
+def check_windows(state, report):
     """The edge windows' invariants at one step (the default of a scene since 0.4.6; the lattice's own are
     check_step's, which the windows leave as they are): each window within its bounds (|q| <= f cap, to 1e-9 of
     the largest), the force the lattice's cells outside the windows and the windows' fine cells carry together
@@ -1445,7 +1445,7 @@ def test_random_ramps_with_edge_windows(path, nodes):
         m0, m1 = bare.memory, state.memory
         assert m0.first == m1.first and np.array_equal(m0.q, m1.q) and np.array_equal(m0.status, m1.status)
         assert np.array_equal(m0.G, m1.G)
-        check_windows(prev, state, report)
+        check_windows(state, report)
 
 
 @pytest.mark.slow

@@ -227,7 +227,7 @@ class EdgeWindows:
             return window, None, None
         edge, reach = self._edge(xf, hf, status, q, qmax, slip, qtol, stol, state, loads1, ctx, fine, side)
         inner = (m1.first + hi) * h if side < 0 else (m1.first + lo) * h
-        if edge is None or side * (inner - edge) > -BUFFER * h:  # (within BUFFER cells of the inner end: the lattice's)
+        if edge is None or side * (inner - edge) > -BUFFER * h:  # (within BUFFER cells of the inner end: the cut's)
             return window, None, None
         return window, edge, self._own_error(edge, reach, hf, fine, lattice_edge)
 
@@ -430,8 +430,9 @@ class EdgeWindows:
 
     def _own_error(self, edge, reach, hf, fine, lattice_edge):
         """How far the window's edge ``edge`` may be from the converged one [m]: the larger of its distance from
-        the lattice's edge ``lattice_edge``, its placement on the fine cells (``reach`` fine cells, _run_edges' placement and the
-        undecided bands) and the placement floor EDGE_PLACEMENT of a fine cell (the two can agree by chance).
+        the lattice's edge ``lattice_edge``, its placement on the fine cells (``reach`` fine cells, _run_edges'
+        placement and the undecided bands) and the placement floor EDGE_PLACEMENT of a fine cell (the two can
+        agree by chance).
 
         The distance is not divided by REFINE - 1, as Richardson's estimate of the finer of two first-order
         solutions would be: the window is not always the better one (an arrived fine cell that sticks as an

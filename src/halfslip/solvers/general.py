@@ -656,9 +656,11 @@ class GeneralSolver(TangentialSolver):
             shear = _shear_apart(fine.memory, coarse) / (self.f * loads1.P)
         elif not self.estimate:
             coarse = None
+        unresolved = 0.0
         if fine.regime != Regime.GROSS_SLIDING:
             # edges placed by a local form or only bracketed (_run_edges), and islands (S1) doubts
-            reach = max(fine.placement * h, _unresolved_reach(fine.slipping, fine.memory.status, h))
+            unresolved = _unresolved_reach(fine.slipping, fine.memory.status, h)
+            reach = max(fine.placement * h, unresolved)
             if reach > 0.0:
                 error = max(error if math.isfinite(error) else 0.0, reach / W)
         windows, edges, regime = (), fine.stick, fine.regime
@@ -670,7 +672,7 @@ class GeneralSolver(TangentialSolver):
                 # they bound: the estimate is theirs (each at least its distance from the lattice's edge,
                 # EdgeWindows._own_error) and (S1)'s doubts, and so is the spread over sub-steps (step), in place
                 # of the lattices' (their cells' placement is what the windows refine)
-                error = spread = max(max(own), _unresolved_reach(fine.slipping, fine.memory.status, h)) / W
+                error = spread = max(max(own), unresolved) / W
             else:
                 # a window's edge far from the lattice's must not look right: the estimate covers their distance
                 apart = max((abs(u - v) for u, v in zip(edges, fine.stick) if math.isfinite(u - v)),
@@ -1350,7 +1352,7 @@ class _Load:
 
 def _quadrature_loads(N: NormalSolution, xa: float, xb: float, inner: np.ndarray, kinks: np.ndarray, graded: bool,
                       h: float) -> np.ndarray:
-    """int p from ``xa`` to ``xa``, each of ``inner`` (increasing, strictly between) and ``xb``, by _Load's
+    """int p from ``xa`` to each of ``xa`` (0), ``inner`` (increasing, strictly between) and ``xb``, by _Load's
     quadrature (its notes): Gauss-Legendre in theta on the intervals between these points and the kinks of h'
     inside the contact, graded towards the kinks (and, where ``graded``, towards the contact edges) on the scale
     of min(``h``, d), KINK_GAUSS points beside them. _Load takes it over the contact at its lattice points, the
