@@ -124,7 +124,7 @@ def dovetail_run(nodes, windows, refine=None, cells=None):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--nodes", type=int, nargs="+", default=[512, 1024])
+    ap.add_argument("--nodes", type=int, nargs="*", default=[512, 1024], help="random histories at these nodes (none: the dovetail only)")
     ap.add_argument("--geometries", nargs="+", default=["punch", "hertz"])
     ap.add_argument("--refine", type=int, help="fine cells per lattice cell (default: _windows.window_size's)")
     ap.add_argument("--cells", type=int, help="lattice cells per window (default: _windows.window_size's)")

@@ -166,8 +166,11 @@ class EdgeWindows:
         and errors [left, right] how far each window's own edge may be from the converged one [m] (:meth:`_own_error`;
         None where the edge is the lattice's)."""
         windows, edges, errors = [], [fine.stick[0], fine.stick[1]], [None, None]
+        drives = None  # (S1)'s, where an edge slips (the stick edges' placement reads them: _edge)
+        if any(fine.slipping):
+            drives = tuple((u / self.solver.f, v) for u, v in self.G._edge_drives(ctx.N1, state.loads, loads1))
         for s, side in enumerate((-1, 1)):
-            got = self._window(state, loads1, ctx, fine, side)
+            got = self._window(state, loads1, ctx, fine, side, drives)
             if got is not None:
                 window, edge, error = got
                 windows.append(window)
@@ -175,8 +178,9 @@ class EdgeWindows:
                     edges[s], errors[s] = edge, error
         return tuple(windows), edges, errors
 
-    def _window(self, state, loads1, ctx, fine, side):
-        """The window at the left (side -1) or right contact edge after the take ``fine``: (its EdgeWindow, its
+    def _window(self, state, loads1, ctx, fine, side, drives):
+        """The window at the left (side -1) or right contact edge after the take ``fine`` (``drives`` (S1)'s, scaled
+        as _run_edges takes them, or None): (its EdgeWindow, its
         outermost stick point or None, that point's own error estimate [m] or None), None where the contact is
         too small or new."""
         S, R, WC = self.solver, self.refine, self.cells
@@ -194,7 +198,7 @@ class EdgeWindows:
         nf = j1 - j0 + 1
         cap = self._loads(N1, hf, j0, j1)
         qmax = S.f * cap
-        cidx = np.clip(np.arange(j0, j1 + 1) // R - (m1.first + lo), 0, WC - 1)
+        cidx = np.minimum(np.maximum(np.arange(j0, j1 + 1) // R - (m1.first + lo), 0), WC - 1)
         lattice_edge = float(fine.stick[(side + 1) // 2])
         if np.all(m1.status[lo:hi]) and not abs(lattice_edge - (N1.left if side < 0 else N1.right)) <= (
                 WC - BUFFER + REACH_MARGIN) * h:
@@ -228,7 +232,7 @@ class EdgeWindows:
             # 1024 nodes: 4 cells farther in than the lattice's edge and SS1's); the lattice's edge and estimate
             # stand, which say so
             return window, None, None
-        edge, reach = self._edge(xf, hf, status, q, qmax, slip, qtol, stol, state, loads1, ctx, fine, side)
+        edge, reach = self._edge(xf, hf, status, q, qmax, slip, qtol, stol, ctx, fine, side, drives)
         inner = (m1.first + hi) * h if side < 0 else (m1.first + lo) * h
         if edge is None or side * (inner - edge) > -BUFFER * h:  # (within BUFFER cells of the inner end: the cut's)
             return window, None, None
@@ -314,17 +318,9 @@ class EdgeWindows:
         first, n = G._cells(L, R_, hf)
         at_left, at_right = j0 <= first, j1 >= first + n - 1
         limit = WINDOW_LOAD_ROUNDING * N.P * hf / (R_ - L)
-        inner, cum, _ = G._closed_form_loads(L, R_, hf, j0, j1 + 1, N.P, *N.pressure_arguments(), limit)
-        if cum.size:
-            ks = np.arange(j0, j1 + 2)
-            v = hf * ks  # (the closed form's own test of which points are inside)
-            F = np.full(ks.size, np.nan)
-            F[(v > L) & (v < R_)] = cum[1:-1]
-            if at_left:
-                F[0] = 0.0
-            if at_right:
-                F[-1] = N.P
-            return np.diff(F) / hf
+        loads = G._fine_cell_loads(L, R_, hf, j0, j1, N.P, *N.pressure_arguments(), limit, at_left, at_right)
+        if loads.size:
+            return loads
         xa = L if at_left else j0 * hf
         xb = R_ if at_right else (j1 + 1) * hf
         inner = np.arange(j0 + 1, j1 + 1) * hf
@@ -402,28 +398,28 @@ class EdgeWindows:
         out[arrived] = inc
         return out
 
-    def _edge(self, xf, hf, status, q, qmax, slip, qtol, stol, state, loads1, ctx, fine, side):
+    def _edge(self, xf, hf, status, q, qmax, slip, qtol, stol, ctx, fine, side, drives):
         """The window's outermost stick point on its side and how far from it, in fine cells, its placement on
         the fine cells may leave it (_run_edges' placement, and _undecided_reach's for cells its active set left
         undecided at its tolerances ``qtol`` and ``stol``; ``slip`` the fine cells' slip in the take): (None, 0)
-        where no cell sticks. (S1) as the lattice's take found it (``fine.slipping``), its drives where an edge
+        where no cell sticks. (S1) as the lattice's take found it (``fine.slipping``), its ``drives`` where an edge
         slips."""
-        G, S = self.G, self.solver
+        G = self.G
         N1, nf = ctx.N1, xf.size
         stuck = np.flatnonzero(status == 0)
         if stuck.size == 0:
             return None, 0.0
         slipping = fine.slipping
-        drives = None
-        if any(slipping):
-            drives = tuple((u / S.f, v) for u, v in G._edge_drives(N1, state.loads, loads1))
         # the stick run nearest the contact edge; the window's inner end is no contact edge: a slipping cell
         # beyond it keeps _run_edges from reading it as one
-        i = k = stuck[0] if side < 0 else stuck[-1]
-        while side < 0 and k + 1 < nf and status[k + 1] == 0:
-            k += 1
-        while side > 0 and i > 0 and status[i - 1] == 0:
-            i -= 1
+        if side < 0:
+            i = int(stuck[0])
+            beyond = np.flatnonzero(status[i:])
+            k = i + int(beyond[0]) - 1 if beyond.size else nf - 1
+        else:
+            k = int(stuck[-1])
+            before = np.flatnonzero(status[:k])
+            i = int(before[-1]) + 1 if before.size else 0
         def pad(a, value):  # one slipping cell beyond the inner end
             return np.concatenate((a, [value]) if side < 0 else ([value], a))
 

@@ -1504,6 +1504,34 @@ def _closed_form_loads(left, right, h, k0, k1, P, x0, d, c0, c1, knots, jumps, p
     return inner, cum, largest
 
 
+@numba.njit(cache=True)
+def _fine_cell_loads(left, right, h, j0, j1, P, x0, d, c0, c1, knots, jumps, piA, limit, at_left,
+                     at_right):  # pragma: no cover - compiled
+    """(1/h) int p over the cells j0 .. j1 of spacing h (boundaries k h), the first reaching to the left contact
+    edge where ``at_left`` and the last to the right one where ``at_right`` (_windows.EdgeWindows._loads): the
+    differences of :func:`_closed_form_loads`' loads at their boundaries; empty where it rounds beyond
+    ``limit`` (the caller's quadrature then)."""
+    _, cum, _ = _closed_form_loads(left, right, h, j0, j1 + 1, P, x0, d, c0, c1, knots, jumps, piA, limit)
+    if cum.size == 0:
+        return cum
+    n = j1 - j0 + 2
+    F = np.full(n, np.nan)
+    c = 1
+    for t in range(n):
+        v = h * (j0 + t)  # (the closed form's own test of which points are inside)
+        if left < v < right:
+            F[t] = cum[c]
+            c += 1
+    if at_left:
+        F[0] = 0.0
+    if at_right:
+        F[n - 1] = P
+    out = np.empty(n - 1)
+    for t in range(n - 1):
+        out[t] = (F[t + 1] - F[t]) / h
+    return out
+
+
 # read-only as a state's arrays are: numba compiles _carried once for both (a read-only array is a type of its own)
 _NOTHING_CARRIED = tuple(_frozen(a) for a in (np.zeros(0, np.int8), np.zeros(0), np.zeros(0), np.zeros(0)))
 _NO_HINT = np.zeros(0, np.int8)
