@@ -47,6 +47,8 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from .._geometry_kernels import pairwise_sum
+
 #: Fine cells per lattice cell in a window (fewer where a window would have more than MAX_FINE_CELLS).
 REFINE = 4
 #: Lattice cells a window spans at each contact edge (the first and last cells of the contact), at least: a
@@ -205,19 +207,24 @@ class EdgeWindows:
             return self._slipping(m1, side, j0, hf, cap, qmax, cidx, lo, hi, lattice_edge), None, None
         span = max(n, mem0.q.size) + abs(m1.first - mem0.first) + 2 * WC + 4
         tabs, span, tf = self._kernel_tables(h, span)
-        gout = self._field(m1, loads1, tabs, span, tf, j0, nf, (), ((lo, hi),))
         old = tuple(w for w in mem0.windows if w.spacing == hf)
-        lock = self._field(mem0, state.loads, tabs, span, tf, j0, nf, old, tuple((w.lo, w.hi) for w in old))
         xf = (j0 + np.arange(nf) + 0.5) * hf
-        lock += self._arrivals(state, ctx, fine, side, xf, lo, hi)
+        ends1 = self._ends(m1, xf, ((lo, hi),))
+        ends0 = self._ends(mem0, xf, tuple((w.lo, w.hi) for w in old))
+        arrivals = self._arrivals(state, ctx, fine, side, xf, lo, hi)
         force = h * float(np.sum(m1.q[lo:hi]))
         status = m1.status[lo:hi][cidx].astype(np.int8)
-        qtol, stol = 1e-10 * float(np.max(qmax)), 1e-10 * S.A * float(np.max(qmax)) * hf
+        top = float(np.max(qmax))
+        qtol, stol = 1e-10 * top, 1e-10 * S.A * top * hf
         self.solved += 1
-        q, c, status, converged = _active_set(tf, gout, lock, qmax, force, hf, status, qtol, stol,
-                                              WINDOW_ITERATIONS)
-        # each fine cell's slip in the take: its displacement less its lock (0 where it sticks)
-        slip = np.where(status != 0, gout + c - _fine_products(tf, j0, nf, j0, q) - lock, 0.0)
+        wq = np.concatenate([w.q for w in old]) if old else _NO_CELLS
+        q, c, status, converged, slip = _solve_window(
+            tabs, span, R, tf, j0, nf, hf,
+            m1.first, m1.q, lo, hi, m1.shift, 0.25 * S.A * loads1.sigma, ends1,
+            mem0.first, mem0.q, np.array([(w.lo, w.hi) for w in old], np.int64).reshape(-1, 2),
+            mem0.shift, 0.25 * S.A * state.loads.sigma, np.array([w.first for w in old], np.int64),
+            np.cumsum([0] + [w.q.size for w in old]).astype(np.int64), wq, ends0, arrivals,
+            qmax, force, status, qtol, stol, WINDOW_ITERATIONS)
         spent, G = self._slip(state, fine, side, converged, status, slip, cap, old, j0, xf, lo, hi)
         for a in (q, cap, status, G):
             a.flags.writeable = False
@@ -269,19 +276,11 @@ class EdgeWindows:
             return 0.0, np.interp(xf, m1.x, m1.G)
         N0 = mem0.normal
         cap0 = self._start_loads(N0, hf, j0, j0 + nf - 1, side, R * m1.first, R * (m1.first + m1.q.size) - 1)
-        moved = status != 0
-        spent = S.f * hf * float(np.sum(0.5 * (cap0[moved] + cap[moved]) * np.abs(slip[moved])))
-        moved = m1.status[lo:hi] != 0
-        spent -= S.f * h * float(np.sum(0.5 * (fine.cap0[lo:hi][moved] + m1.capacity[lo:hi][moved])
-                                        * np.abs(fine.slip[lo:hi][moved])))
-        arrived = ~((xf > N0.left) & (xf < N0.right))
-        G = np.zeros(nf)
-        G[~arrived] = np.interp(xf[~arrived], mem0.x, mem0.G)
-        for w in old:
-            k = j0 + np.arange(nf) - w.first
-            had = (k >= 0) & (k < w.q.size) & ~arrived
-            G[had] = w.G[k[had]]
-        return spent, G + slip
+        return _slip_parts(S.f, hf, h, status, slip, cap0, cap, m1.status[lo:hi], fine.cap0[lo:hi],
+                           m1.capacity[lo:hi], fine.slip[lo:hi], xf, N0.left, N0.right, mem0.x, mem0.G, j0,
+                           np.array([w.first for w in old], np.int64),
+                           np.cumsum([0] + [w.q.size for w in old]).astype(np.int64),
+                           np.concatenate([w.G for w in old]) if old else _NO_CELLS)
 
     def _kernel_tables(self, h, span):
         """(tabs, span, tf): the lattice's kernel at the REFINE fine offsets within a cell over +- span cells
@@ -352,37 +351,29 @@ class EdgeWindows:
         loads[j1 - j0] += float(np.sum(loads[j1 - j0 + 1:]))
         return loads[:j1 - j0 + 1]
 
-    def _field(self, mem, loads, tabs, span, tf, jf0, nf, windows, exclude):
-        """The displacement at the fine centres jf0 .. jf0 + nf - 1 of a state: its lattice shear outside the
-        ``exclude`` ranges of its cells, ``windows``' fine shear, its shift, bulk term and the end cells outside
-        those ranges."""
-        S, R = self.solver, self.refine
-        h = mem.spacing
-        xs = (jf0 + np.arange(nf) + 0.5) * (h / R)
-        q = np.array(mem.q, dtype=float)
-        for lo, hi in exclude:
-            q[lo:hi] = 0.0
-        out = mem.shift + 0.25 * S.A * loads.sigma * xs - _far_field(tabs, span, R, jf0, nf, mem.first, q)
-        for w in windows:
-            out -= _fine_products(tf, jf0, nf, w.first, w.q)
-        ends = [e for e in self.G._end_supports(mem.normal, mem.first, q.size, h)
+    def _ends(self, mem, xs, exclude):
+        """What a state's end cells outside the ``exclude`` ranges of its cells take off the displacement at the
+        fine centres ``xs`` beyond its cells' shear (_end_columns times their shear; the datum cancels), or an
+        empty array where there are none (_solve_window's field)."""
+        ends = [e for e in self.G._end_supports(mem.normal, mem.first, mem.q.size, mem.spacing)
                 if not any(lo <= e[0] < hi for lo, hi in exclude)]
-        if ends:
-            C = S._end_columns(mem.normal, mem.first, h, ends, xs)
-            out -= C @ q[[k for k, _, _ in ends]]
-        return out
+        if not ends:
+            return _NO_CELLS
+        C = self.solver._end_columns(mem.normal, mem.first, mem.spacing, ends, xs)
+        return C @ mem.q[[k for k, _, _ in ends]]
 
     def _arrivals(self, state, ctx, fine, side, xf, lo, hi):
-        """What the fine cells centred at ``xf`` that arrive in the take add to their locks (0 elsewhere): M1's
-        increments, or where the lattice's take slipped in part and has a stuck arrived cell among its cells
-        lo .. hi - 1 (those under the window), the arrivals' shape with the lattice's size there."""
+        """What the fine cells centred at ``xf`` that arrive in the take add to their locks (0 elsewhere; an empty
+        array where none arrives): M1's increments, or where the lattice's take slipped in part and has a stuck
+        arrived cell among its cells lo .. hi - 1 (those under the window), the arrivals' shape with the
+        lattice's size there."""
         S, G = self.solver, self.G
         m1, mem0 = fine.memory, state.memory
         N0 = mem0.normal
+        if N0.left < xf[0] and xf[-1] < N0.right:
+            return _NO_CELLS
         out = np.zeros(xf.size)
         arrived = ~((xf > N0.left) & (xf < N0.right))
-        if not np.any(arrived):
-            return out
         edge = N0.left if side < 0 else N0.right
         xe = xf[arrived]
         inc = side * G._integrate(ctx.path, xe, edge, side, S.A, None)
@@ -458,6 +449,100 @@ def same_windows(a: tuple, b: tuple) -> bool:
     """Whether two states' windows stand on the same fine cells."""
     return len(a) == len(b) and all((u.side, u.first, u.spacing, u.q.size, u.lo, u.hi)
                                     == (v.side, v.first, v.spacing, v.q.size, v.lo, v.hi) for u, v in zip(a, b))
+
+
+#: No cells (an empty float array: no end cells' term, no arrivals, no old windows).
+_NO_CELLS = np.zeros(0)
+
+
+@numba.njit(cache=True)
+def _field(tabs, span, R, tf, j0, nf, hf, first, q, exclude, shift, bulk, wfirst, wstart, wq,
+           ends):  # pragma: no cover - compiled
+    """The displacement at the fine centres j0 .. j0 + nf - 1 of a state: shift + bulk x less its lattice shear's
+    outside the ``exclude`` ranges ((k, 2), of its cells from lattice index ``first``: _far_field), the fine
+    shear of its windows (``wq[wstart[w]:wstart[w + 1]]`` from fine index ``wfirst[w]``: _fine_products) and
+    its end cells' term ``ends`` (EdgeWindows._ends; empty: none), in that order."""
+    lattice = q.copy()
+    for r in range(exclude.shape[0]):
+        for j in range(exclude[r, 0], exclude[r, 1]):
+            lattice[j] = 0.0
+    far = _far_field(tabs, span, R, j0, nf, first, lattice)
+    out = np.empty(nf)
+    for i in range(nf):
+        out[i] = (shift + bulk * ((j0 + i + 0.5) * hf)) - far[i]
+    for w in range(wfirst.size):
+        fine = _fine_products(tf, j0, nf, wfirst[w], wq[wstart[w]:wstart[w + 1]])
+        for i in range(nf):
+            out[i] -= fine[i]
+    if ends.size:
+        for i in range(nf):
+            out[i] -= ends[i]
+    return out
+
+
+@numba.njit(cache=True)
+def _solve_window(tabs, span, R, tf, j0, nf, hf, first1, q1, lo, hi, shift1, bulk1, ends1, first0, q0, exclude0,
+                  shift0, bulk0, wfirst, wstart, wq, ends0, arrivals, qmax, force, status, qtol, stol,
+                  max_iter):  # pragma: no cover - compiled
+    """A window's take in one call (EdgeWindows._window): its drive (the take's state, its own cells lo .. hi - 1
+    left out: :func:`_field`) and locks (the state at the take's start with its old windows, plus the
+    ``arrivals``' increments where given), the active set (:func:`_active_set`) and each fine cell's slip in
+    the take (its displacement less its lock, 0 where it sticks). Returns q, c, the pattern, whether it
+    converged and the slip."""
+    gout = _field(tabs, span, R, tf, j0, nf, hf, first1, q1, np.array([[lo, hi]], np.int64), shift1, bulk1,
+                  wfirst[:0], wstart[:1], wq[:0], ends1)
+    lock = _field(tabs, span, R, tf, j0, nf, hf, first0, q0, exclude0, shift0, bulk0, wfirst, wstart, wq, ends0)
+    if arrivals.size:
+        for i in range(nf):
+            lock[i] += arrivals[i]
+    q, c, status, converged = _active_set(tf, gout, lock, qmax, force, hf, status, qtol, stol, max_iter)
+    own = _fine_products(tf, j0, nf, j0, q)
+    slip = np.zeros(nf)
+    for i in range(nf):
+        if status[i] != 0:
+            slip[i] = gout[i] + c - own[i] - lock[i]
+    return q, c, status, converged, slip
+
+
+@numba.njit(cache=True)
+def _slip_parts(f, hf, h, status, slip, cap0, cap, lattice_status, lattice_cap0, lattice_cap, lattice_slip, xf,
+                left0, right0, x0, G0, j0, wfirst, wstart, wG):  # pragma: no cover - compiled
+    """EdgeWindows._slip where the window converged and its cut does not slip: (what it changes the take's
+    dissipation by, its fine cells' accumulated slip). The dissipation: f hf sum (cap0 + cap) / 2 |slip| over
+    its slipping fine cells less f h times the same over the lattice's cells it covers (numpy's sums: pairwise);
+    the slip before the take: the old windows' own (``wG[wstart[w]:wstart[w + 1]]`` from fine index
+    ``wfirst[w]``) where they had the cell, elsewhere the lattice's as it reads there (``x0``, ``G0``), 0 for
+    the cells that arrived in the take (outside (left0, right0))."""
+    nf = xf.size
+    terms = np.empty(nf)
+    count = 0
+    for i in range(nf):
+        if status[i] != 0:
+            terms[count] = 0.5 * (cap0[i] + cap[i]) * abs(slip[i])
+            count += 1
+    spent = f * hf * pairwise_sum(terms, 0, count)
+    terms = np.empty(lattice_status.size)
+    count = 0
+    for i in range(lattice_status.size):
+        if lattice_status[i] != 0:
+            terms[count] = 0.5 * (lattice_cap0[i] + lattice_cap[i]) * abs(lattice_slip[i])
+            count += 1
+    spent -= f * h * pairwise_sum(terms, 0, count)
+    G = np.zeros(nf)
+    kept = np.empty(nf, np.bool_)
+    for i in range(nf):
+        kept[i] = left0 < xf[i] < right0
+    G[kept] = np.interp(xf[kept], x0, G0)
+    for w in range(wfirst.size):
+        size = wstart[w + 1] - wstart[w]
+        for i in range(nf):
+            k = j0 + i - wfirst[w]
+            if 0 <= k < size and kept[i]:
+                G[i] = wG[wstart[w] + k]
+    out = np.empty(nf)
+    for i in range(nf):
+        out[i] = G[i] + slip[i]
+    return spent, out
 
 
 @numba.njit(cache=True)
