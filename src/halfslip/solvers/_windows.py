@@ -159,6 +159,7 @@ class EdgeWindows:
         # the fine cells' loads per contact (a take's are the next take's start loads; a step that changes
         # neither P nor M keeps its contact): the solver's own kind of store, as many as its loads
         self._cell_loads = general._Kept(general.LOADS_KEPT)
+        self._columns = general._Kept(general.LOADS_KEPT)  # the end cells' columns at a window's fine centres
         self.solved = self.failed = self.skipped = 0
 
     # -- one take ---------------------------------------------------------------------------------------------
@@ -171,8 +172,9 @@ class EdgeWindows:
         drives = None  # (S1)'s, where an edge slips (the stick edges' placement reads them: _edge)
         if any(fine.slipping):
             drives = tuple((u / self.solver.f, v) for u, v in self.G._edge_drives(ctx.N1, state.loads, loads1))
+        old = _Old(tuple(w for w in state.memory.windows if w.spacing == ctx.h / self.refine))
         for s, side in enumerate((-1, 1)):
-            got = self._window(state, loads1, ctx, fine, side, drives)
+            got = self._window(state, loads1, ctx, fine, side, drives, old)
             if got is not None:
                 window, edge, error = got
                 windows.append(window)
@@ -180,9 +182,10 @@ class EdgeWindows:
                     edges[s], errors[s] = edge, error
         return tuple(windows), edges, errors
 
-    def _window(self, state, loads1, ctx, fine, side, drives):
+    def _window(self, state, loads1, ctx, fine, side, drives, old):
         """The window at the left (side -1) or right contact edge after the take ``fine`` (``drives`` (S1)'s, scaled
-        as _run_edges takes them, or None): (its EdgeWindow, its
+        as _run_edges takes them, or None; ``old`` the state's windows on the same fine cells, :class:`_Old`):
+        (its EdgeWindow, its
         outermost stick point or None, that point's own error estimate [m] or None), None where the contact is
         too small or new."""
         S, R, WC = self.solver, self.refine, self.cells
@@ -207,25 +210,22 @@ class EdgeWindows:
             return self._slipping(m1, side, j0, hf, cap, qmax, cidx, lo, hi, lattice_edge), None, None
         span = max(n, mem0.q.size) + abs(m1.first - mem0.first) + 2 * WC + 4
         tabs, span, tf = self._kernel_tables(h, span)
-        old = tuple(w for w in mem0.windows if w.spacing == hf)
         xf = (j0 + np.arange(nf) + 0.5) * hf
         ends1 = self._ends(m1, xf, ((lo, hi),))
-        ends0 = self._ends(mem0, xf, tuple((w.lo, w.hi) for w in old))
+        ends0 = self._ends(mem0, xf, old.ranges)
         arrivals = self._arrivals(state, ctx, fine, side, xf, lo, hi)
         force = h * float(np.sum(m1.q[lo:hi]))
         status = m1.status[lo:hi][cidx].astype(np.int8)
         top = float(np.max(qmax))
         qtol, stol = 1e-10 * top, 1e-10 * S.A * top * hf
         self.solved += 1
-        wq = np.concatenate([w.q for w in old]) if old else _NO_CELLS
-        q, c, status, converged, slip = _solve_window(
-            tabs, span, R, tf, j0, nf, hf,
-            m1.first, m1.q, lo, hi, m1.shift, 0.25 * S.A * loads1.sigma, ends1,
-            mem0.first, mem0.q, np.array([(w.lo, w.hi) for w in old], np.int64).reshape(-1, 2),
-            mem0.shift, 0.25 * S.A * state.loads.sigma, np.array([w.first for w in old], np.int64),
-            np.cumsum([0] + [w.q.size for w in old]).astype(np.int64), wq, ends0, arrivals,
-            qmax, force, status, qtol, stol, WINDOW_ITERATIONS)
-        spent, G = self._slip(state, fine, side, converged, status, slip, cap, old, j0, xf, lo, hi)
+        cut = (nf - BUFFER * R, nf) if side < 0 else (0, BUFFER * R)
+        q, c, status, converged, slip, cut_slips = _solve_window(
+            tabs, span, R, tf, j0, nf, hf, m1.first, m1.q, lo, hi, m1.shift, 0.25 * S.A * loads1.sigma, ends1,
+            mem0.first, mem0.q, old.exclude, mem0.shift, 0.25 * S.A * state.loads.sigma, old.first, old.start,
+            old.q, ends0, arrivals, qmax, force, status, qtol, stol, WINDOW_ITERATIONS, *cut)
+        spent, G = self._slip(state, fine, side, converged and not cut_slips, status, slip, cap, old, j0, xf, lo,
+                              hi)
         for a in (q, cap, status, G):
             a.flags.writeable = False
         window = EdgeWindow(side, j0, hf, q, cap, status, G, lo, hi, lattice_edge, spent)
@@ -261,26 +261,23 @@ class EdgeWindows:
             a.flags.writeable = False
         return EdgeWindow(side, j0, hf, q, cap, status, G, lo, hi, lattice_edge, 0.0)
 
-    def _slip(self, state, fine, side, converged, status, slip, cap, old, j0, xf, lo, hi):
+    def _slip(self, state, fine, side, kept, status, slip, cap, old, j0, xf, lo, hi):
         """(what the window changes the take's dissipation by, the slip accumulated at its fine cells): its fine
         cells' slip in the take (their displacement less their lock, 0 where stuck) added to the slip before it
         (the lattice's as it reads there, the old windows' own where they had the cell), and their f (cap0 +
         cap) / 2 |slip| hf in place of the lattice's cells lo .. hi - 1. Where the window did not converge or
         its cells within BUFFER lattice cells of its inner end slip (the cut, not the contact, would set their
-        slip): (0, the lattice's slip as it reads at the fine centres)."""
+        slip; ``kept`` False for either): (0, the lattice's slip as it reads at the fine centres)."""
         S, R, m1, mem0 = self.solver, self.refine, fine.memory, state.memory
         nf, h = xf.size, m1.spacing
         hf = h / R
-        cut = status[nf - BUFFER * R:] if side < 0 else status[:BUFFER * R]
-        if not converged or np.any(cut):
+        if not kept:
             return 0.0, np.interp(xf, m1.x, m1.G)
         N0 = mem0.normal
         cap0 = self._start_loads(N0, hf, j0, j0 + nf - 1, side, R * m1.first, R * (m1.first + m1.q.size) - 1)
         return _slip_parts(S.f, hf, h, status, slip, cap0, cap, m1.status[lo:hi], fine.cap0[lo:hi],
                            m1.capacity[lo:hi], fine.slip[lo:hi], xf, N0.left, N0.right, mem0.x, mem0.G, j0,
-                           np.array([w.first for w in old], np.int64),
-                           np.cumsum([0] + [w.q.size for w in old]).astype(np.int64),
-                           np.concatenate([w.G for w in old]) if old else _NO_CELLS)
+                           old.first, old.start, old.G)
 
     def _kernel_tables(self, h, span):
         """(tabs, span, tf): the lattice's kernel at the REFINE fine offsets within a cell over +- span cells
@@ -359,7 +356,11 @@ class EdgeWindows:
                 if not any(lo <= e[0] < hi for lo, hi in exclude)]
         if not ends:
             return _NO_CELLS
-        C = self.solver._end_columns(mem.normal, mem.first, mem.spacing, ends, xs)
+        key = (mem.first, mem.q.size, mem.spacing, float(xs[0]), xs.size, tuple(k for k, _, _ in ends))
+        C = self._columns.get(key, (mem.normal,))
+        if C is None:  # (a take's are the next take's where the contact stays: a step that changes neither P nor M)
+            C = self._columns.put(key, (mem.normal,), self.solver._end_columns(mem.normal, mem.first, mem.spacing,
+                                                                                ends, xs))
         return C @ mem.q[[k for k, _, _ in ends]]
 
     def _arrivals(self, state, ctx, fine, side, xf, lo, hi):
@@ -445,6 +446,22 @@ class EdgeWindows:
         return max(apart, reach * hf, floor)
 
 
+class _Old:
+    """A state's windows on the fine cells of a take's (EdgeWindows.solve), as the compiled calls take them:
+    ``ranges`` (the lattice cells each stands in for) and ``exclude`` the same as a (k, 2) array, ``first`` their
+    first fine indices, and their shear ``q`` and accumulated slip ``G`` end to end (window w's from
+    ``start[w]`` to ``start[w + 1]``)."""
+
+    def __init__(self, windows: tuple):
+        self.windows = windows
+        self.ranges = tuple((w.lo, w.hi) for w in windows)
+        self.exclude = np.array(self.ranges, np.int64).reshape(-1, 2)
+        self.first = np.array([w.first for w in windows], np.int64)
+        self.start = np.cumsum([0] + [w.q.size for w in windows]).astype(np.int64)
+        self.q = np.concatenate([w.q for w in windows]) if windows else _NO_CELLS
+        self.G = np.concatenate([w.G for w in windows]) if windows else _NO_CELLS
+
+
 def same_windows(a: tuple, b: tuple) -> bool:
     """Whether two states' windows stand on the same fine cells."""
     return len(a) == len(b) and all((u.side, u.first, u.spacing, u.q.size, u.lo, u.hi)
@@ -482,13 +499,14 @@ def _field(tabs, span, R, tf, j0, nf, hf, first, q, exclude, shift, bulk, wfirst
 
 @numba.njit(cache=True)
 def _solve_window(tabs, span, R, tf, j0, nf, hf, first1, q1, lo, hi, shift1, bulk1, ends1, first0, q0, exclude0,
-                  shift0, bulk0, wfirst, wstart, wq, ends0, arrivals, qmax, force, status, qtol, stol,
-                  max_iter):  # pragma: no cover - compiled
+                  shift0, bulk0, wfirst, wstart, wq, ends0, arrivals, qmax, force, status, qtol, stol, max_iter,
+                  cut0, cut1):  # pragma: no cover - compiled
     """A window's take in one call (EdgeWindows._window): its drive (the take's state, its own cells lo .. hi - 1
     left out: :func:`_field`) and locks (the state at the take's start with its old windows, plus the
     ``arrivals``' increments where given), the active set (:func:`_active_set`) and each fine cell's slip in
     the take (its displacement less its lock, 0 where it sticks). Returns q, c, the pattern, whether it
-    converged and the slip."""
+    converged, the slip and whether any of the fine cells cut0 .. cut1 - 1 (those within BUFFER lattice cells of
+    the window's inner end) slips."""
     gout = _field(tabs, span, R, tf, j0, nf, hf, first1, q1, np.array([[lo, hi]], np.int64), shift1, bulk1,
                   wfirst[:0], wstart[:1], wq[:0], ends1)
     lock = _field(tabs, span, R, tf, j0, nf, hf, first0, q0, exclude0, shift0, bulk0, wfirst, wstart, wq, ends0)
@@ -501,7 +519,10 @@ def _solve_window(tabs, span, R, tf, j0, nf, hf, first1, q1, lo, hi, shift1, bul
     for i in range(nf):
         if status[i] != 0:
             slip[i] = gout[i] + c - own[i] - lock[i]
-    return q, c, status, converged, slip
+    cut_slips = False
+    for i in range(cut0, cut1):
+        cut_slips = cut_slips or status[i] != 0
+    return q, c, status, converged, slip, cut_slips
 
 
 @numba.njit(cache=True)
