@@ -202,25 +202,21 @@ class EdgeWindows:
             j0, j1 = R * (m1.first + n - WC), math.floor(N1.right / hf - 0.5)
         nf = j1 - j0 + 1
         cap = self._loads(N1, hf, j0, j1)
-        qmax = S.f * cap
-        cidx = np.minimum(np.maximum(np.arange(j0, j1 + 1) // R - (m1.first + lo), 0), WC - 1)
+        qmax, status, xf, force, top, all_slip = _prologue(S.f, cap, R, j0, j1, hf, h, m1.first, lo, hi,
+                                                                 m1.status, m1.q)
         lattice_edge = float(fine.stick[(side + 1) // 2])
-        if np.all(m1.status[lo:hi]) and not abs(lattice_edge - (N1.left if side < 0 else N1.right)) <= (
+        if all_slip and not abs(lattice_edge - (N1.left if side < 0 else N1.right)) <= (
                 WC - BUFFER + REACH_MARGIN) * h:
-            return self._slipping(m1, side, j0, hf, cap, qmax, cidx, lo, hi, lattice_edge), None, None
+            return self._slipping(m1, side, j0, hf, cap, qmax, status, xf, lo, hi, lattice_edge), None, None
         span = max(n, mem0.q.size) + abs(m1.first - mem0.first) + 2 * WC + 4
         tabs, span, tf = self._kernel_tables(h, span)
-        xf = (j0 + np.arange(nf) + 0.5) * hf
         ends1 = self._ends(m1, xf, ((lo, hi),))
         ends0 = self._ends(mem0, xf, old.ranges)
         arrivals = self._arrivals(state, ctx, fine, side, xf, lo, hi)
-        force = h * float(np.sum(m1.q[lo:hi]))
-        status = m1.status[lo:hi][cidx].astype(np.int8)
-        top = float(np.max(qmax))
         qtol, stol = 1e-10 * top, 1e-10 * S.A * top * hf
         self.solved += 1
         cut = (nf - BUFFER * R, nf) if side < 0 else (0, BUFFER * R)
-        q, c, status, converged, slip, cut_slips = _solve_window(
+        q, _, status, converged, slip, cut_slips = _solve_window(
             tabs, span, R, tf, j0, nf, hf, m1.first, m1.q, lo, hi, m1.shift, 0.25 * S.A * loads1.sigma, ends1,
             mem0.first, mem0.q, old.exclude, mem0.shift, 0.25 * S.A * state.loads.sigma, old.first, old.start,
             old.q, ends0, arrivals, qmax, force, status, qtol, stol, WINDOW_ITERATIONS, *cut)
@@ -246,7 +242,7 @@ class EdgeWindows:
         return window, edge, self._own_error(edge, reach, hf, fine, lattice_edge)
 
     # -- the parts ------------------------------------------------------------------------------------------
-    def _slipping(self, m1, side, j0, hf, cap, qmax, cidx, lo, hi, lattice_edge):
+    def _slipping(self, m1, side, j0, hf, cap, qmax, status, xf, lo, hi, lattice_edge):
         """The window over lattice cells lo .. hi - 1 that all slip, the lattice's outermost stick point on its side
         beyond the window's reach (REACH_MARGIN): not solved. Its fine cells slip the way of their lattice cell at
         their bound, the history the next take's window on this side locks from (a solve's answer but where the
@@ -254,9 +250,8 @@ class EdgeWindows:
         be the lattice's); the lattice's slip and dissipation stand (as where a solved window's slip zone reaches
         its cut)."""
         self.skipped += 1
-        status = m1.status[lo:hi][cidx].astype(np.int8)
         q = status * qmax
-        G = np.interp((j0 + np.arange(cidx.size) + 0.5) * hf, m1.x, m1.G)
+        G = np.interp(xf, m1.x, m1.G)
         for a in (q, cap, status, G):
             a.flags.writeable = False
         return EdgeWindow(side, j0, hf, q, cap, status, G, lo, hi, lattice_edge, 0.0)
@@ -396,36 +391,18 @@ class EdgeWindows:
         undecided at its tolerances ``qtol`` and ``stol``; ``slip`` the fine cells' slip in the take): (None, 0)
         where no cell sticks. (S1) as the lattice's take found it (``fine.slipping``), its ``drives`` where an edge
         slips."""
-        G = self.G
-        N1, nf = ctx.N1, xf.size
-        stuck = np.flatnonzero(status == 0)
-        if stuck.size == 0:
+        G, N1 = self.G, ctx.N1
+        # the stick run nearest the contact edge (the window's inner end is no contact edge: _padded)
+        found, i, k, xs, qs, caps, st, ss = _padded(side, xf, hf, q, status, qmax, slip)
+        if not found:
             return None, 0.0
         slipping = fine.slipping
-        # the stick run nearest the contact edge; the window's inner end is no contact edge: a slipping cell
-        # beyond it keeps _run_edges from reading it as one
-        if side < 0:
-            i = int(stuck[0])
-            beyond = np.flatnonzero(status[i:])
-            k = i + int(beyond[0]) - 1 if beyond.size else nf - 1
-        else:
-            k = int(stuck[-1])
-            before = np.flatnonzero(status[:k])
-            i = int(before[-1]) + 1 if before.size else 0
-        def pad(a, value):  # one slipping cell beyond the inner end
-            return np.concatenate((a, [value]) if side < 0 else ([value], a))
-
-        xs = pad(xf, xf[-1] + hf if side < 0 else xf[0] - hf)
-        qs, st = pad(q, 0.0), pad(status, 1).astype(np.int8)
-        caps = pad(qmax, qmax[-1 if side < 0 else 0])
-        if side > 0:
-            i, k = i + 1, k + 1
         one_side = (slipping[0], False) if side < 0 else (False, slipping[1])
         at = (side + 1) // 2
         left, right, placement = G._run_edges(xs, qs, caps, st, N1, hf, i, k, one_side, drives, at)
         edge = left if side < 0 else right
         # (the padded cell slips: its slip is no undecided band's)
-        undecided = G._undecided_reach(xs, qs, caps, pad(slip, math.inf), st, N1, hf, i, k, one_side, drives,
+        undecided = G._undecided_reach(xs, qs, caps, ss, st, N1, hf, i, k, one_side, drives,
                                        (left, right), qtol, stol, (at,))
         return edge, max(placement, undecided)
 
@@ -470,6 +447,73 @@ def same_windows(a: tuple, b: tuple) -> bool:
 
 #: No cells (an empty float array: no end cells' term, no arrivals, no old windows).
 _NO_CELLS = np.zeros(0)
+
+
+@numba.njit(cache=True)
+def _prologue(f, cap, R, j0, j1, hf, h, first, lo, hi, lattice_status, lattice_q):  # pragma: no cover - compiled
+    """What a window over the lattice's cells lo .. hi - 1 (from lattice index ``first``) on the fine cells
+    j0 .. j1 starts from (EdgeWindows._window): the fine cells' bounds f cap, the pattern (each one's lattice
+    cell's among lo .. hi - 1; those in contact beyond the window's end cell are its), their centres, the force the lattice's cells carry there (h times numpy's sum), the largest bound and whether
+    all those lattice cells slip."""
+    nf = j1 - j0 + 1
+    cells = hi - lo
+    qmax = np.empty(nf)
+    status = np.empty(nf, np.int8)
+    xf = np.empty(nf)
+    top = -np.inf
+    for i in range(nf):
+        qmax[i] = f * cap[i]
+        top = max(top, qmax[i])
+        status[i] = lattice_status[lo + min(max((j0 + i) // R - (first + lo), 0), cells - 1)]
+        xf[i] = (j0 + i + 0.5) * hf
+    all_slip = True
+    for j in range(lo, hi):
+        all_slip = all_slip and lattice_status[j] != 0
+    return qmax, status, xf, h * pairwise_sum(lattice_q, lo, hi - lo), top, all_slip
+
+
+@numba.njit(cache=True)
+def _padded(side, xf, hf, q, status, qmax, slip):  # pragma: no cover - compiled
+    """The window's stick run nearest its contact edge (EdgeWindows._edge), as _run_edges reads it: whether any
+    fine cell sticks, its first and last cells i, k and the window's centres, shear, bounds, pattern and slip
+    with one slipping cell more beyond its inner end (no contact edge: it keeps _run_edges from reading one
+    there; its slip infinite, no undecided band's), i and k counted with it."""
+    nf = xf.size
+    xs = np.empty(nf + 1)
+    qs = np.empty(nf + 1)
+    caps = np.empty(nf + 1)
+    st = np.empty(nf + 1, np.int8)
+    ss = np.empty(nf + 1)
+    at = 0 if side < 0 else 1  # the window's first cell among the padded ones
+    for j in range(nf):
+        xs[at + j], qs[at + j], caps[at + j] = xf[j], q[j], qmax[j]
+        st[at + j], ss[at + j] = status[j], slip[j]
+    pad = nf if side < 0 else 0
+    xs[pad] = xf[nf - 1] + hf if side < 0 else xf[0] - hf
+    qs[pad], caps[pad], st[pad], ss[pad] = 0.0, qmax[nf - 1] if side < 0 else qmax[0], 1, np.inf
+    i = k = -1
+    if side < 0:
+        for j in range(nf):
+            if status[j] == 0:
+                i = j
+                break
+        if i < 0:
+            return False, i, k, xs, qs, caps, st, ss
+        k = i
+        while k + 1 < nf and status[k + 1] == 0:
+            k += 1
+    else:
+        for j in range(nf - 1, -1, -1):
+            if status[j] == 0:
+                k = j
+                break
+        if k < 0:
+            return False, i, k, xs, qs, caps, st, ss
+        i = k
+        while i > 0 and status[i - 1] == 0:
+            i -= 1
+        i, k = i + 1, k + 1
+    return True, i, k, xs, qs, caps, st, ss
 
 
 @numba.njit(cache=True)
