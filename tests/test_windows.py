@@ -237,6 +237,105 @@ def test_far_field_is_the_sum_over_the_lattices_cells(R):
         assert np.array_equal(_far_field(tabs, span, R, jf0, nf, first, q), want)
 
 
+def test_window_compiled_parts_are_numpys_steps():
+    """The window's compiled parts (since 0.4.7; _prologue, _field, _padded, _slip_parts) give what the numpy
+    expressions they replaced give, to the last bit, on random inputs (seeded): the fine cells' bounds, pattern,
+    centres, force (numpy's pairwise sum) and largest bound; the displacement at the fine centres (shift + bulk
+    x less the lattice's shear outside the excluded cells, the old windows' fine shear and the end cells' term,
+    in that order); the stick run nearest the contact edge and the padded cells; the dissipation (numpy's
+    sums) and the accumulated slip."""
+    from halfslip.solvers._windows import (_far_field, _field, _fine_products, _padded, _prologue,
+                                           _slip_parts)
+
+    rng = np.random.default_rng(20261129)
+    for trial in range(40):
+        R, cells = int(rng.integers(2, 9)), int(rng.integers(4, 20))
+        n, first = int(rng.integers(2 * cells + 4, 400)), int(rng.integers(-30, 30))
+        side = -1 if trial % 2 else 1
+        lo, hi = (0, cells) if side < 0 else (n - cells, n)
+        j0 = R * (first + lo) + (int(rng.integers(0, R)) if side < 0 else 0)
+        j1 = R * (first + hi) - 1 - (0 if side < 0 else int(rng.integers(0, R)))
+        nf, hf, h, f = j1 - j0 + 1, 1e-6 / R, 1e-6, 0.3
+        cap = rng.uniform(1e6, 1e8, nf)
+        lattice_status = rng.choice(np.array([-1, 0, 1], np.int8), n)
+        if trial % 5 == 0:
+            lattice_status[lo:hi] = 1
+        lattice_q = rng.standard_normal(n)
+        qmax, status, xf, force, top, all_slip = _prologue(f, cap, R, j0, j1, hf, h, first, lo, hi,
+                                                           lattice_status, lattice_q)
+        cidx = np.clip(np.arange(j0, j1 + 1) // R - (first + lo), 0, cells - 1)
+        assert np.array_equal(qmax, f * cap) and top == float(np.max(f * cap))
+        assert np.array_equal(status, lattice_status[lo:hi][cidx].astype(np.int8))
+        assert np.array_equal(xf, (j0 + np.arange(nf) + 0.5) * hf)
+        assert force == h * float(np.sum(lattice_q[lo:hi])) and all_slip == bool(np.all(lattice_status[lo:hi]))
+
+        span = n + 4 * cells
+        tabs, tf = rng.standard_normal((R, 2 * span + 1)), rng.standard_normal(R * (span + cells) + 2)
+        windows = [(R * first + int(rng.integers(0, R * n // 2)), rng.standard_normal(int(rng.integers(1, 60))))
+                   for _ in range(int(rng.integers(0, 3)))]
+        exclude = np.array([(0, cells), (n - cells, n)][:len(windows)], np.int64).reshape(-1, 2)
+        ends = rng.standard_normal(nf) if trial % 3 else np.zeros(0)
+        shift, bulk = float(rng.standard_normal()), float(rng.standard_normal())
+        wfirst = np.array([w for w, _ in windows], np.int64)
+        wstart = np.cumsum([0] + [q.size for _, q in windows]).astype(np.int64)
+        wq = np.concatenate([q for _, q in windows]) if windows else np.zeros(0)
+        got = _field(tabs, span, R, tf, j0, nf, hf, first, lattice_q, exclude, shift, bulk, wfirst, wstart, wq,
+                     ends)
+        q = lattice_q.copy()
+        for a, b in exclude:
+            q[a:b] = 0.0
+        want = shift + bulk * ((j0 + np.arange(nf) + 0.5) * hf) - _far_field(tabs, span, R, j0, nf, first, q)
+        for w, wqs in windows:
+            want -= _fine_products(tf, j0, nf, w, wqs)
+        if ends.size:
+            want -= ends
+        assert np.array_equal(got, want)
+
+        fine_q, slip = rng.standard_normal(nf), rng.standard_normal(nf)
+        found, i, k, xs, qs, caps, st, ss = _padded(side, xf, hf, fine_q, status, qmax, slip)
+        stuck = np.flatnonzero(status == 0)
+        assert found == bool(stuck.size)
+        pad = (lambda a, v: np.concatenate((a, [v]))) if side < 0 else (lambda a, v: np.concatenate(([v], a)))
+        assert np.array_equal(xs, pad(xf, xf[-1] + hf if side < 0 else xf[0] - hf))
+        assert np.array_equal(qs, pad(fine_q, 0.0)) and np.array_equal(st, pad(status, 1).astype(np.int8))
+        assert np.array_equal(caps, pad(qmax, qmax[-1 if side < 0 else 0])) and np.array_equal(ss, pad(slip, np.inf))
+        if found:
+            run = np.flatnonzero(status != 0)
+            if side < 0:
+                want_i = int(stuck[0])
+                beyond = run[run > want_i]
+                want_k = int(beyond[0]) - 1 if beyond.size else nf - 1
+            else:
+                want_k = int(stuck[-1])
+                before = run[run < want_k]
+                want_i = int(before[-1]) + 1 if before.size else 0
+                want_i, want_k = want_i + 1, want_k + 1
+            assert (i, k) == (want_i, want_k)
+
+        cap0, x0 = rng.uniform(1e6, 1e8, nf), np.sort(rng.uniform(xf[0] - 5 * h, xf[-1] + 5 * h, 40))
+        G0 = rng.standard_normal(40)
+        lat = (rng.choice(np.array([-1, 0, 1], np.int8), cells), rng.uniform(1e6, 1e8, cells),
+               rng.uniform(1e6, 1e8, cells), rng.standard_normal(cells))
+        left0, right0 = xf[0] + float(rng.uniform(-2, 3)) * hf, xf[-1] - float(rng.uniform(-2, 3)) * hf
+        old_G = [rng.standard_normal(q.size) for _, q in windows]
+        wG = np.concatenate(old_G) if windows else np.zeros(0)
+        spent, G = _slip_parts(f, hf, h, status, slip, cap0, cap, *lat, xf, left0, right0, x0, G0, j0, wfirst,
+                               wstart, wG)
+        moved = status != 0
+        want = f * hf * float(np.sum(0.5 * (cap0[moved] + cap[moved]) * np.abs(slip[moved])))
+        moved = lat[0] != 0
+        want -= f * h * float(np.sum(0.5 * (lat[1][moved] + lat[2][moved]) * np.abs(lat[3][moved])))
+        assert spent == want
+        arrived = ~((xf > left0) & (xf < right0))
+        before = np.zeros(nf)
+        before[~arrived] = np.interp(xf[~arrived], x0, G0)
+        for (w, wqs), wg in zip(windows, old_G):
+            kk = j0 + np.arange(nf) - w
+            had = (kk >= 0) & (kk < wqs.size) & ~arrived
+            before[had] = wg[kk[had]]
+        assert np.array_equal(G, before + slip)
+
+
 # =============================================================================
 # 3. the dense active set
 # =============================================================================
