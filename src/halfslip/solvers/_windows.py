@@ -30,9 +30,17 @@ their cells (GeneralSolver.tractions, slip, station_states) and the dissipation;
 cells, its sub-steps, its estimate) is the same with or without them. Measured (2026-11-29,
 benchmarks/bench_edge_windows.py, docs/benchmarks.md): the rounded punch's random histories at 512 nodes, 95th
 percentile of the vouched stick edges 2.7e-4 -> 9.6e-5 of the width (Hertz 6.1e-5 -> 6.0e-5: set inside the
-contact), 2.6 -> 4.9 ms a step; the dovetail (every step marched) at 1000 nodes against 16000, 95th percentile
-2.1e-4 -> 6.1e-5, 0.57 -> 1.21 ms a step (its largest, 3.4e-3, is the load maximum's ill-conditioned band, which
-they leave as it is), dissipation per cycle 0.31 % -> 0.06 % off (against 16000 nodes).
+contact), 5.0 -> 8.1 ms a step; the dovetail (every step marched) at 1000 nodes against 16000, 95th percentile
+2.1e-4 -> 6.1e-5, 1.07 -> 1.77 ms a step (its largest, 3.4e-3, is the load maximum's ill-conditioned band, which
+they leave as it is), dissipation per cycle 0.31 % -> 0.06 % off (against 16000 nodes). (Times on a slower
+machine than 0.4.6's 2.6 -> 4.9 and 0.57 -> 1.21.)
+
+A window is a handful of compiled calls (since 0.4.7; the same numbers as the numpy they replaced, to the last
+bit): :func:`_prologue` (bounds, pattern, centres, force), :func:`_solve_window` (drive and locks as displacements
+at the fine centres, :func:`_field`; the active set; the slip), :func:`_slip_parts` (dissipation, accumulated
+slip), :func:`_padded` and the lattice's _run_edges (the edge), general._fine_cell_loads (the loads, kept per
+contact, as are the end cells' columns at the fine centres); the dovetail's windows 0.86 -> 0.53 ms a step
+against 0.4.6 (A/B, one session).
 
 The estimate: where both outermost stick points are the windows' (and bound the lattice's widest stick interval),
 the step's error estimate is the windows' own (:meth:`EdgeWindows._own_error`: each edge's distance from the
@@ -491,28 +499,16 @@ def _padded(side, xf, hf, q, status, qmax, slip):  # pragma: no cover - compiled
     pad = nf if side < 0 else 0
     xs[pad] = xf[nf - 1] + hf if side < 0 else xf[0] - hf
     qs[pad], caps[pad], st[pad], ss[pad] = 0.0, qmax[nf - 1] if side < 0 else qmax[0], 1, np.inf
-    i = k = -1
-    if side < 0:
-        for j in range(nf):
-            if status[j] == 0:
-                i = j
-                break
-        if i < 0:
-            return False, i, k, xs, qs, caps, st, ss
-        k = i
-        while k + 1 < nf and status[k + 1] == 0:
-            k += 1
-    else:
-        for j in range(nf - 1, -1, -1):
-            if status[j] == 0:
-                k = j
-                break
-        if k < 0:
-            return False, i, k, xs, qs, caps, st, ss
-        i = k
-        while i > 0 and status[i - 1] == 0:
-            i -= 1
-        i, k = i + 1, k + 1
+    end, step = (0, 1) if side < 0 else (nf - 1, -1)  # from the contact edge inwards
+    j = end
+    while 0 <= j < nf and status[j] != 0:
+        j += step
+    if not 0 <= j < nf:
+        return False, -1, -1, xs, qs, caps, st, ss
+    e = j
+    while 0 <= e + step < nf and status[e + step] == 0:
+        e += step
+    i, k = min(j, e) + at, max(j, e) + at
     return True, i, k, xs, qs, caps, st, ss
 
 
