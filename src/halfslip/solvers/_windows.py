@@ -210,8 +210,8 @@ class EdgeWindows:
             j0, j1 = R * (m1.first + n - WC), math.floor(N1.right / hf - 0.5)
         nf = j1 - j0 + 1
         cap = self._loads(N1, hf, j0, j1)
-        qmax, status, xf, force, top, all_slip = _prologue(S.f, cap, R, j0, j1, hf, h, m1.first, lo, hi,
-                                                                 m1.status, m1.q)
+        qmax, status, xf, force, top, all_slip = _prologue(S.f, cap, R, j0, j1, hf, h, m1.first, lo, hi, m1.status,
+                                                           m1.q)
         lattice_edge = float(fine.stick[(side + 1) // 2])
         if all_slip and not abs(lattice_edge - (N1.left if side < 0 else N1.right)) <= (
                 WC - BUFFER + REACH_MARGIN) * h:
@@ -438,7 +438,6 @@ class _Old:
     ``start[w]`` to ``start[w + 1]``)."""
 
     def __init__(self, windows: tuple):
-        self.windows = windows
         self.ranges = tuple((w.lo, w.hi) for w in windows)
         self.exclude = np.array(self.ranges, np.int64).reshape(-1, 2)
         self.first = np.array([w.first for w in windows], np.int64)
@@ -461,8 +460,9 @@ _NO_CELLS = np.zeros(0)
 def _prologue(f, cap, R, j0, j1, hf, h, first, lo, hi, lattice_status, lattice_q):  # pragma: no cover - compiled
     """What a window over the lattice's cells lo .. hi - 1 (from lattice index ``first``) on the fine cells
     j0 .. j1 starts from (EdgeWindows._window): the fine cells' bounds f cap, the pattern (each one's lattice
-    cell's among lo .. hi - 1; those in contact beyond the window's end cell are its), their centres, the force the lattice's cells carry there (h times numpy's sum), the largest bound and whether
-    all those lattice cells slip."""
+    cell's among lo .. hi - 1; those in contact beyond the window's end cell are its), their centres, the force
+    the lattice's cells carry there (h times numpy's sum), the largest bound and whether all those lattice cells
+    slip."""
     nf = j1 - j0 + 1
     cells = hi - lo
     qmax = np.empty(nf)
