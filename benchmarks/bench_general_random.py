@@ -229,6 +229,10 @@ def machine():
 WARM_UP_NODES = 64
 
 
+#: The general solver's rows: without and with its edge windows (GeneralSolver's edge_windows).
+GENERAL_ROW = {False: "halfslip general", True: "halfslip general, edge windows"}
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--nodes", type=int, nargs="+", default=[256, 512, 1024, 2048])
@@ -236,20 +240,26 @@ def main(argv=None):
     ap.add_argument("--geometries", nargs="+", default=["hertz", "punch"])
     ap.add_argument("--repeat", type=int, default=1, help="passes per run, both solvers; the best time counts")
     ap.add_argument("--baseline", type=int, nargs="*", default=[], help="IC baseline N to time in this run")
+    ap.add_argument("--windows", choices=("off", "on", "both"), default="both",
+                    help="the general solver without its edge windows, with them (a scene's default since 0.4.6), or "
+                         "both")
     ap.add_argument("--no-doc", action="store_true")
     args = ap.parse_args(argv)
     ref = np.load(REFERENCE)
     rows = []
-    jobs = [("halfslip general", n) for n in args.nodes] + [("IC baseline", n) for n in args.baseline]
+    modes = {"off": (False,), "on": (True,), "both": (False, True)}[args.windows]
+    jobs = [(GENERAL_ROW[w], n) for n in args.nodes for w in modes] + [("IC baseline", n) for n in args.baseline]
     # numba loads its compiled functions from the cache at their first call (seconds): not in the first row
     for g in args.geometries:
-        run_solver(g, 0, WARM_UP_NODES)
+        for w in modes:
+            run_solver(g, 0, WARM_UP_NODES, edge_windows=w)
     for name, n in jobs:
         for g in args.geometries:
             pooled, sure, main, mism, diss, inter, failed, wall, steps, est = [], [], [], 0, [], 0, 0, 0.0, 0, []
             classes, other, covered = dict.fromkeys(EXCEEDANCE, 0), 0.0, 0
             for seed in range(args.seeds):
-                run = run_solver(g, seed, n, args.repeat) if name != "IC baseline" else run_baseline(g, seed, n, args.repeat)
+                run = (run_baseline(g, seed, n, args.repeat) if name == "IC baseline" else
+                       run_solver(g, seed, n, args.repeat, edge_windows=name == GENERAL_ROW[True]))
                 e, v, m, d, i, f, (c, o, cov) = compare(run, ref, f"{g}_{seed}_")
                 sure.append(v)
                 classes = {k: classes[k] + c[k] for k in classes}
@@ -313,7 +323,8 @@ def write_doc(rows, args, argv):
             "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     text = (f"{BEGIN}\nMeasured with `python benchmarks/bench_general_random.py {argv}` on {time.strftime('%Y-%m-%d')}; "
             f"machine: {machine()}. Times: the best of {args.repeat} pass{'es' if args.repeat > 1 else ''} per history, for "
-            f"both solvers. Seeds 0..{args.seeds - 1} per geometry (112 steps each); errors against "
+            f"both solvers; the general solver's rows without and with its edge windows (`edge_windows`, a scene's "
+            f"default since 0.4.6). Seeds 0..{args.seeds - 1} per geometry (112 steps each); errors against "
             f"benchmarks/reference/random_reference.npz (edges relative to the contact width; dissipation "
             f"against the reference's Richardson value, and against its run at N = {TIME_N} with every step cut into "
             f"{TIME_SPLIT} sub-steps, benchmarks/reference/runs/*_{TIME_N}_t{TIME_SPLIT}.npz). The 95th percentile is given "
