@@ -131,6 +131,8 @@ def main(argv=None):
     ap.add_argument("--dovetail", type=int, nargs="*", default=[500, 1000, 2000, 4000],
                     help="nodes (against --dovetail-reference)")
     ap.add_argument("--dovetail-reference", type=int, default=16000)
+    ap.add_argument("--repeat", type=int, default=1,
+                    help="passes per run, with and without windows in turn; the best time counts (the same numbers)")
     ap.add_argument("--no-doc", action="store_true")
     args = ap.parse_args(argv)
     ref = np.load(REFERENCE)
@@ -143,7 +145,8 @@ def main(argv=None):
                 vouched, every, failed, solved, wall, steps = [], [], 0, 0, 0.0, 0
                 estimates, misses, edges = [], 0, 0
                 for seed in (0, 1):
-                    run = random_run(g, seed, nodes, windows, args.refine, args.cells)
+                    run = _best(lambda: random_run(g, seed, nodes, windows, args.refine, args.cells), args.repeat,
+                                lambda r: r["wall"])
                     e, v, *_ = compare(run, ref, f"{g}_{seed}_")
                     vouched.append(v)
                     every.append(e)
@@ -162,8 +165,8 @@ def main(argv=None):
         reference, width, *_, spent, _, sure = dovetail_run(args.dovetail_reference, False)
         for nodes in args.dovetail:
             for windows in (False, True):
-                edges, _, wall, failed, solved, cycle, label, est = dovetail_run(nodes, windows, args.refine,
-                                                                                  args.cells)
+                edges, _, wall, failed, solved, cycle, label, est = _best(
+                    lambda: dovetail_run(nodes, windows, args.refine, args.cells), args.repeat, lambda r: r[2])
                 err = np.abs(edges - reference) / width
                 # (an edge the estimate misses: off by more than the estimate and the reference's own together)
                 worst = np.nanmax(err, axis=1)
@@ -175,6 +178,18 @@ def main(argv=None):
                 print(_dovetail_row(dovetail_rows[-1]), flush=True)
     if not args.no_doc:
         write_doc(random_rows, dovetail_rows, args, " ".join(sys.argv[1:] if argv is None else argv))
+
+
+def _best(run, repeat, wall):
+    """``run()`` ``repeat`` times: the first pass's answer (every pass gives the same numbers) with the least wall
+    time of all (``wall`` reads it from an answer; a dict's "wall" or a tuple's third item)."""
+    first = run()
+    least = wall(first)
+    for _ in range(repeat - 1):
+        least = min(least, wall(run()))
+    if isinstance(first, dict):
+        return dict(first, wall=least)
+    return first[:2] + (least,) + first[3:]
 
 
 def _misses(run, ref, key):
@@ -208,7 +223,8 @@ def write_doc(random_rows, dovetail_rows, args, argv):
     text = (f"{BEGIN}\nMeasured with `python benchmarks/bench_edge_windows.py {argv}` on "
             f"{time.strftime('%Y-%m-%d')}; machine: {machine()}. The general solver's outermost stick points with "
             "its fine windows at the contact edges (`solver.edge_windows`, halfslip.solvers._windows: one-way "
-            "coupled to the lattice) against the lattice alone; ms / step: GeneralSolver.step alone, one pass.\n\n"
+            "coupled to the lattice) against the lattice alone; ms / step: GeneralSolver.step alone, the best of "
+            f"{args.repeat} pass{'es' if args.repeat > 1 else ''}.\n\n"
             "Random histories (seeds 0, 1), stick edges against benchmarks/reference/random_reference.npz, relative to "
             f"the contact width; vouched: the reference's own estimate at most {VOUCH:g}:\n\n"
             f"The estimate: the steps' error_estimate, its median, the share of steps above {TOL:g} of the width "
