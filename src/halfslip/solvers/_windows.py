@@ -30,8 +30,8 @@ their cells (GeneralSolver.tractions, slip, station_states) and the dissipation;
 cells, its sub-steps, its estimate) is the same with or without them. Measured (2026-11-29,
 benchmarks/bench_edge_windows.py, docs/benchmarks.md): the rounded punch's random histories at 512 nodes, 95th
 percentile of the vouched stick edges 2.7e-4 -> 9.6e-5 of the width (Hertz 6.1e-5 -> 6.0e-5: set inside the
-contact), 5.0 -> 8.1 ms a step; the dovetail (every step marched) at 1000 nodes against 16000, 95th percentile
-2.1e-4 -> 6.1e-5, 1.07 -> 1.77 ms a step (its largest, 3.4e-3, is the load maximum's ill-conditioned band, which
+contact), 5.0 -> 7.6 ms a step; the dovetail (every step marched) at 1000 nodes against 16000, 95th percentile
+2.1e-4 -> 6.1e-5, 1.14 -> 1.89 ms a step (its largest, 3.4e-3, is the load maximum's ill-conditioned band, which
 they leave as it is), dissipation per cycle 0.31 % -> 0.06 % off (against 16000 nodes). (Times on a slower
 machine than 0.4.6's 2.6 -> 4.9 and 0.57 -> 1.21.)
 
