@@ -279,7 +279,7 @@ def test_window_compiled_parts_are_numpys_steps():
         wfirst = np.array([w for w, _ in windows], np.int64)
         wstart = np.cumsum([0] + [q.size for _, q in windows]).astype(np.int64)
         wq = np.concatenate([q for _, q in windows]) if windows else np.zeros(0)
-        got = _field(tabs, span, R, tf, j0, nf, hf, first, lattice_q, exclude, shift, bulk, wfirst, wstart, wq,
+        got = _field(tabs, span, R, tf, j0, xf, first, lattice_q, exclude, shift, bulk, wfirst, wstart, wq,
                      ends)
         q = lattice_q.copy()
         for a, b in exclude:

@@ -177,12 +177,9 @@ class EdgeWindows:
         and errors [left, right] how far each window's own edge may be from the converged one [m] (:meth:`_own_error`;
         None where the edge is the lattice's)."""
         windows, edges, errors = [], [fine.stick[0], fine.stick[1]], [None, None]
-        drives = None  # (S1)'s, where an edge slips (the stick edges' placement reads them: _edge)
-        if any(fine.slipping):
-            drives = tuple((u / self.solver.f, v) for u, v in self.G._edge_drives(ctx.N1, state.loads, loads1))
         old = _Old(tuple(w for w in state.memory.windows if w.spacing == ctx.h / self.refine))
         for s, side in enumerate((-1, 1)):
-            got = self._window(state, loads1, ctx, fine, side, drives, old)
+            got = self._window(state, loads1, ctx, fine, side, old)
             if got is not None:
                 window, edge, error = got
                 windows.append(window)
@@ -190,12 +187,10 @@ class EdgeWindows:
                     edges[s], errors[s] = edge, error
         return tuple(windows), edges, errors
 
-    def _window(self, state, loads1, ctx, fine, side, drives, old):
-        """The window at the left (side -1) or right contact edge after the take ``fine`` (``drives`` (S1)'s, scaled
-        as _run_edges takes them, or None; ``old`` the state's windows on the same fine cells, :class:`_Old`):
-        (its EdgeWindow, its
-        outermost stick point or None, that point's own error estimate [m] or None), None where the contact is
-        too small or new."""
+    def _window(self, state, loads1, ctx, fine, side, old):
+        """The window at the left (side -1) or right contact edge after the take ``fine`` (``old``: the state's
+        windows on the same fine cells, :class:`_Old`): (its EdgeWindow, its outermost stick point or None, that
+        point's own error estimate [m] or None), None where the contact is too small or new."""
         S, R, WC = self.solver, self.refine, self.cells
         h, N1, m1, mem0 = ctx.h, ctx.N1, fine.memory, state.memory
         n, N0 = m1.q.size, mem0.normal
@@ -225,7 +220,7 @@ class EdgeWindows:
         self.solved += 1
         cut = (nf - BUFFER * R, nf) if side < 0 else (0, BUFFER * R)
         q, _, status, converged, slip, cut_slips = _solve_window(
-            tabs, span, R, tf, j0, nf, hf, m1.first, m1.q, lo, hi, m1.shift, 0.25 * S.A * loads1.sigma, ends1,
+            tabs, span, R, tf, j0, xf, hf, m1.first, m1.q, lo, hi, m1.shift, 0.25 * S.A * loads1.sigma, ends1,
             mem0.first, mem0.q, old.exclude, mem0.shift, 0.25 * S.A * state.loads.sigma, old.first, old.start,
             old.q, ends0, arrivals, qmax, force, status, qtol, stol, WINDOW_ITERATIONS, *cut)
         spent, G = self._slip(state, fine, side, converged and not cut_slips, status, slip, cap, old, j0, xf, lo,
@@ -243,7 +238,7 @@ class EdgeWindows:
             # 1024 nodes: 4 cells farther in than the lattice's edge and SS1's); the lattice's edge and estimate
             # stand, which say so
             return window, None, None
-        edge, reach = self._edge(xf, hf, status, q, qmax, slip, qtol, stol, ctx, fine, side, drives)
+        edge, reach = self._edge(xf, hf, status, q, qmax, slip, qtol, stol, ctx, fine, side)
         inner = (m1.first + hi) * h if side < 0 else (m1.first + lo) * h
         if edge is None or side * (inner - edge) > -BUFFER * h:  # (within BUFFER cells of the inner end: the cut's)
             return window, None, None
@@ -393,18 +388,17 @@ class EdgeWindows:
         out[arrived] = inc
         return out
 
-    def _edge(self, xf, hf, status, q, qmax, slip, qtol, stol, ctx, fine, side, drives):
+    def _edge(self, xf, hf, status, q, qmax, slip, qtol, stol, ctx, fine, side):
         """The window's outermost stick point on its side and how far from it, in fine cells, its placement on
         the fine cells may leave it (_run_edges' placement, and _undecided_reach's for cells its active set left
         undecided at its tolerances ``qtol`` and ``stol``; ``slip`` the fine cells' slip in the take): (None, 0)
-        where no cell sticks. (S1) as the lattice's take found it (``fine.slipping``), its ``drives`` where an edge
-        slips."""
+        where no cell sticks. (S1) as the lattice's take found it (``fine.slipping``, ``fine.drives``)."""
         G, N1 = self.G, ctx.N1
         # the stick run nearest the contact edge (the window's inner end is no contact edge: _padded)
         found, i, k, xs, qs, caps, st, ss = _padded(side, xf, hf, q, status, qmax, slip)
         if not found:
             return None, 0.0
-        slipping = fine.slipping
+        slipping, drives = fine.slipping, fine.drives
         one_side = (slipping[0], False) if side < 0 else (False, slipping[1])
         at = (side + 1) // 2
         left, right, placement = G._run_edges(xs, qs, caps, st, N1, hf, i, k, one_side, drives, at)
@@ -513,12 +507,13 @@ def _padded(side, xf, hf, q, status, qmax, slip):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
-def _field(tabs, span, R, tf, j0, nf, hf, first, q, exclude, shift, bulk, wfirst, wstart, wq,
+def _field(tabs, span, R, tf, j0, xf, first, q, exclude, shift, bulk, wfirst, wstart, wq,
            ends):  # pragma: no cover - compiled
-    """The displacement at the fine centres j0 .. j0 + nf - 1 of a state: shift + bulk x less its lattice shear's
-    outside the ``exclude`` ranges ((k, 2), of its cells from lattice index ``first``: _far_field), the fine
-    shear of its windows (``wq[wstart[w]:wstart[w + 1]]`` from fine index ``wfirst[w]``: _fine_products) and
-    its end cells' term ``ends`` (EdgeWindows._ends; empty: none), in that order."""
+    """The displacement at the fine centres ``xf`` (fine indices from j0) of a state: shift + bulk x less its
+    lattice shear's outside the ``exclude`` ranges ((k, 2), of its cells from lattice index ``first``:
+    _far_field), the fine shear of its windows (``wq[wstart[w]:wstart[w + 1]]`` from fine index ``wfirst[w]``:
+    _fine_products) and its end cells' term ``ends`` (EdgeWindows._ends; empty: none), in that order."""
+    nf = xf.size
     lattice = q.copy()
     for r in range(exclude.shape[0]):
         for j in range(exclude[r, 0], exclude[r, 1]):
@@ -526,7 +521,7 @@ def _field(tabs, span, R, tf, j0, nf, hf, first, q, exclude, shift, bulk, wfirst
     far = _far_field(tabs, span, R, j0, nf, first, lattice)
     out = np.empty(nf)
     for i in range(nf):
-        out[i] = (shift + bulk * ((j0 + i + 0.5) * hf)) - far[i]
+        out[i] = (shift + bulk * xf[i]) - far[i]
     for w in range(wfirst.size):
         fine = _fine_products(tf, j0, nf, wfirst[w], wq[wstart[w]:wstart[w + 1]])
         for i in range(nf):
@@ -538,7 +533,7 @@ def _field(tabs, span, R, tf, j0, nf, hf, first, q, exclude, shift, bulk, wfirst
 
 
 @numba.njit(cache=True)
-def _solve_window(tabs, span, R, tf, j0, nf, hf, first1, q1, lo, hi, shift1, bulk1, ends1, first0, q0, exclude0,
+def _solve_window(tabs, span, R, tf, j0, xf, hf, first1, q1, lo, hi, shift1, bulk1, ends1, first0, q0, exclude0,
                   shift0, bulk0, wfirst, wstart, wq, ends0, arrivals, qmax, force, status, qtol, stol, max_iter,
                   cut0, cut1):  # pragma: no cover - compiled
     """A window's take in one call (EdgeWindows._window): its drive (the take's state, its own cells lo .. hi - 1
@@ -547,9 +542,10 @@ def _solve_window(tabs, span, R, tf, j0, nf, hf, first1, q1, lo, hi, shift1, bul
     the take (its displacement less its lock, 0 where it sticks). Returns q, c, the pattern, whether it
     converged, the slip and whether any of the fine cells cut0 .. cut1 - 1 (those within BUFFER lattice cells of
     the window's inner end) slips."""
-    gout = _field(tabs, span, R, tf, j0, nf, hf, first1, q1, np.array([[lo, hi]], np.int64), shift1, bulk1,
-                  wfirst[:0], wstart[:1], wq[:0], ends1)
-    lock = _field(tabs, span, R, tf, j0, nf, hf, first0, q0, exclude0, shift0, bulk0, wfirst, wstart, wq, ends0)
+    nf = xf.size
+    gout = _field(tabs, span, R, tf, j0, xf, first1, q1, np.array([[lo, hi]], np.int64), shift1, bulk1, wfirst[:0],
+                  wstart[:1], wq[:0], ends1)
+    lock = _field(tabs, span, R, tf, j0, xf, first0, q0, exclude0, shift0, bulk0, wfirst, wstart, wq, ends0)
     if arrivals.size:
         for i in range(nf):
             lock[i] += arrivals[i]

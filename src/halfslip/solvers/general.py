@@ -345,6 +345,7 @@ class _Outcome:
     slip: np.ndarray | None = None  # each cell's slip in the take and its load at the take's start (the fine take's,
     cap0: np.ndarray | None = None  # with edge_windows: the windows take the dissipation of the cells they cover)
     undecided: tuple = (0.0, 0.0)  # with edge_windows: _undecided_reach at the outermost left / right stick edge
+    drives: tuple | None = None  # (S1)'s (u / f, v) at each contact edge where one slips, as _run_edges takes them
 
 
 class GeneralSolver(TangentialSolver):
@@ -841,7 +842,7 @@ class GeneralSolver(TangentialSolver):
                 widest, placement = tuple(widest), max(placement, inner)
         kept = (s, cap0, undecided) if self.windows is not None and not shadow else (None, None, (0.0, 0.0))
         return _Outcome(memory, shift, dissipation, edges, widest, regime, slipped > 0, iterations, residual,
-                        message, slipping, placement, *kept)
+                        message, slipping, placement, *kept, drives)
 
     def _active_set(self, lat: "_EndCellLattice", n: int, r: np.ndarray, qmax: np.ndarray, total: float,
                     status: np.ndarray, qtol: float, stol: float, fit=None):
