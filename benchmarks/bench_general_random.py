@@ -6,7 +6,7 @@
 
 Accuracy: stick edges (outermost, relative to the contact width) and the
 final cumulative dissipation against benchmarks/reference/random_reference.npz
-(the IC baseline self-converged at N = 1000..8000, its own error stated there).
+(the IC baseline self-converged at N = 1000..16000, its own error stated there).
 Speed: the solver's step() alone (normal solves included, no output), per
 step, the best of ``--repeat`` passes. With ``--baseline N ...`` the IC
 baseline (benchmarks/baseline_ic.py) runs on the same histories in the same
@@ -108,9 +108,15 @@ def run_baseline(geometry, seed, n, repeat=1):
 RUNS = HERE / "reference" / "runs"
 
 
-def main_errors(run, geometry, seed):
-    """Edges of the widest stick interval against the reference's finest run (N = 8000), / width."""
-    fine = np.load(RUNS / f"{geometry}_{seed}_8000.npz")
+def reference_levels(ref):
+    """The reference's finest N and the one below it (benchmarks/reference_random.py stores its levels)."""
+    levels = sorted(int(n) for n in ref["levels"])
+    return levels[-1], levels[-2]
+
+
+def main_errors(run, geometry, seed, ref):
+    """Edges of the widest stick interval against the reference's finest run, / width."""
+    fine = np.load(RUNS / f"{geometry}_{seed}_{reference_levels(ref)[0]}.npz")
     W = fine["contact_right"] - fine["contact_left"]
     out = []
     for side in ("main_left", "main_right"):
@@ -141,8 +147,8 @@ VOUCH = 1e-4
 
 def reference_error(ref, key):
     """{side: the reference's own error at each step's stick edge}, relative to the width, for "stick_left"
-    and "stick_right": the larger of its convergence in space (Richardson from N = 4000 and 8000, stored with
-    it) and in time (its run at N = TIME_N with every step cut into TIME_SPLIT sub-steps against the same N in
+    and "stick_right": the larger of its convergence in space (Richardson from its two finest levels, stored
+    with it) and in time (its run at N = TIME_N with every step cut into TIME_SPLIT sub-steps against the same N in
     one increment: the reference takes each step as one increment, and where its stick edge moves far within
     a step that is off by up to half a 1024-node cell, seed 1 of the punch)."""
     W = ref[key + "contact_right"] - ref[key + "contact_left"]
@@ -265,7 +271,7 @@ def main(argv=None):
                 classes = {k: classes[k] + c[k] for k in classes}
                 other, covered = max(other, o), covered + cov
                 pooled.append(e)
-                main.append(main_errors(run, g, seed))
+                main.append(main_errors(run, g, seed, ref))
                 mism, inter, failed = mism + m, inter + i, failed + f
                 diss.append(d)
                 wall += run["wall"]
@@ -321,15 +327,16 @@ def write_doc(rows, args, argv):
             f"steps above {EVERY_STEP:g}: {' / '.join(EXCEEDANCE)} | max of the other steps | own edge islands and other "
             "steps the error estimate covers (at least a third of the error) |\n"
             "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    fine, coarse = reference_levels(np.load(REFERENCE))
     text = (f"{BEGIN}\nMeasured with `python benchmarks/bench_general_random.py {argv}` on {time.strftime('%Y-%m-%d')}; "
             f"machine: {machine()}. Times: the best of {args.repeat} pass{'es' if args.repeat > 1 else ''} per history, for "
             f"both solvers; the general solver's rows without and with its edge windows (`edge_windows`, a scene's "
             f"default since 0.4.6). Seeds 0..{args.seeds - 1} per geometry (112 steps each); errors against "
-            f"benchmarks/reference/random_reference.npz (edges relative to the contact width; dissipation "
+            f"benchmarks/reference/random_reference.npz (its run at N = {fine}; edges relative to the contact width; dissipation "
             f"against the reference's Richardson value, and against its run at N = {TIME_N} with every step cut into "
             f"{TIME_SPLIT} sub-steps, benchmarks/reference/runs/*_{TIME_N}_t{TIME_SPLIT}.npz). The 95th percentile is given "
             f"over all edges and over those the reference vouches for: its own error estimate (the larger of its "
-            f"Richardson estimate from N = 4000 and 8000 and of its run at N = {TIME_N} with {TIME_SPLIT} sub-steps per step "
+            f"Richardson estimate from N = {coarse} and {fine} and of its run at N = {TIME_N} with {TIME_SPLIT} sub-steps per step "
             f"against the same N in one increment, bench_general_random.reference_error) at most {VOUCH:g} of the width "
             f"(bench_general_random.VOUCH). Steps whose outermost stick edge is off by more than "
             f"{EVERY_STEP:g} of the width are sorted into classes (bench_general_random.EXCEEDANCE): the reference's "
