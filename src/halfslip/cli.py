@@ -231,7 +231,7 @@ def describe_profile(profile: Any) -> str:
 
 def _note_first_compilation(scene, method) -> None:
     """Say so when the general solver's compiled kernels are not in numba's cache yet (the first general run
-    after installing compiles them, about 40 s, and shows no progress meanwhile)."""
+    after installing compiles them, 45-55 s on a 2-core Xeon, and shows no progress meanwhile)."""
     from .simulator import MethodError, choose_method
     from .solvers._toeplitz import compiled_and_cached
 
@@ -240,7 +240,7 @@ def _note_first_compilation(scene, method) -> None:
     except MethodError:
         return  # simulate says what is wrong
     if general and not compiled_and_cached():
-        click.echo("halfslip: note: compiling the general solver's kernels (once after installing, about 40 s)",
+        click.echo("halfslip: note: compiling the general solver's kernels (once after installing, about a minute)",
                    err=True)
 
 
