@@ -249,6 +249,8 @@ def main(argv=None):
     ap.add_argument("--windows", choices=("off", "on", "both"), default="both",
                     help="the general solver without its edge windows, with them (a scene's default since 0.4.6), or "
                          "both")
+    ap.add_argument("--stick-travel", type=float, default=None,
+                    help="the general solver's stick_travel (default: its own, DEFAULT_STICK_TRAVEL)")
     ap.add_argument("--no-doc", action="store_true")
     args = ap.parse_args(argv)
     ref = np.load(REFERENCE)
@@ -265,7 +267,8 @@ def main(argv=None):
             classes, other, covered = dict.fromkeys(EXCEEDANCE, 0), 0.0, 0
             for seed in range(args.seeds):
                 run = (run_baseline(g, seed, n, args.repeat) if name == "IC baseline" else
-                       run_solver(g, seed, n, args.repeat, edge_windows=name == GENERAL_ROW[True]))
+                       run_solver(g, seed, n, args.repeat, edge_windows=name == GENERAL_ROW[True],
+                                  stick_travel=args.stick_travel))
                 e, v, m, d, i, f, (c, o, cov) = compare(run, ref, f"{g}_{seed}_")
                 sure.append(v)
                 classes = {k: classes[k] + c[k] for k in classes}
