@@ -116,7 +116,9 @@ def reference_levels(ref):
 
 def main_errors(run, geometry, seed, ref):
     """Edges of the widest stick interval against the reference's finest run, / width."""
-    fine = np.load(RUNS / f"{geometry}_{seed}_{reference_levels(ref)[0]}.npz")
+    split = int(ref.get(f"{geometry}_{seed}_split", 1))
+    name = f"{geometry}_{seed}_{reference_levels(ref)[0]}" + (f"_t{split}" if split > 1 else "")
+    fine = np.load(RUNS / f"{name}.npz")
     W = fine["contact_right"] - fine["contact_left"]
     out = []
     for side in ("main_left", "main_right"):
@@ -150,10 +152,13 @@ def reference_error(ref, key):
     and "stick_right": the larger of its convergence in space (Richardson from its two finest levels, stored
     with it) and in time (its run at N = TIME_N with every step cut into TIME_SPLIT sub-steps against the same N in
     one increment: the reference takes each step as one increment, and where its stick edge moves far within
-    a step that is off by up to half a 1024-node cell, seed 1 of the punch)."""
+    a step that is off by up to half a 1024-node cell, seed 1 of the punch). A reference cut in time itself
+    (reference_random.py --split) stores both in its estimate."""
     W = ref[key + "contact_right"] - ref[key + "contact_left"]
     timed, single = RUNS / f"{key}{TIME_N}_t{TIME_SPLIT}.npz", RUNS / f"{key}{TIME_N}.npz"
     runs = (np.load(timed), np.load(single)) if timed.exists() and single.exists() else None
+    if int(ref.get(key + "split", 1)) > 1:  # a reference cut in time carries its time error itself
+        runs = None
     out = {}
     for side in ("stick_left", "stick_right"):
         error = np.array(ref[key + side + "_err"], dtype=float)
@@ -330,17 +335,27 @@ def write_doc(rows, args, argv):
             f"steps above {EVERY_STEP:g}: {' / '.join(EXCEEDANCE)} | max of the other steps | own edge islands and other "
             "steps the error estimate covers (at least a third of the error) |\n"
             "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
-    fine, coarse = reference_levels(np.load(REFERENCE))
+    ref = np.load(REFERENCE)
+    fine, coarse = reference_levels(ref)
+    split = max(int(ref[k]) for k in ref.files if k.endswith("_split")) if any(
+        k.endswith("_split") for k in ref.files) else 1
+    if split > 1:
+        run = f"its run at N = {fine} with every step cut into {split} sub-steps"
+        own = (f"the larger of its Richardson estimate in space from N = {coarse} and {fine} (single-increment runs) "
+               f"and of its own in time, |x_{split} - x_1| / ({split} - 1) at N = {fine}")
+    else:
+        run = f"its run at N = {fine}"
+        own = (f"the larger of its Richardson estimate from N = {coarse} and {fine} and of its run at N = {TIME_N} "
+               f"with {TIME_SPLIT} sub-steps per step against the same N in one increment")
     text = (f"{BEGIN}\nMeasured with `python benchmarks/bench_general_random.py {argv}` on {time.strftime('%Y-%m-%d')}; "
             f"machine: {machine()}. Times: the best of {args.repeat} pass{'es' if args.repeat > 1 else ''} per history, for "
             f"both solvers; the general solver's rows without and with its edge windows (`edge_windows`, a scene's "
             f"default since 0.4.6). Seeds 0..{args.seeds - 1} per geometry (112 steps each); errors against "
-            f"benchmarks/reference/random_reference.npz (its run at N = {fine}; edges relative to the contact width; dissipation "
+            f"benchmarks/reference/random_reference.npz ({run}; edges relative to the contact width; dissipation "
             f"against the reference's Richardson value, and against its run at N = {TIME_N} with every step cut into "
             f"{TIME_SPLIT} sub-steps, benchmarks/reference/runs/*_{TIME_N}_t{TIME_SPLIT}.npz). The 95th percentile is given "
-            f"over all edges and over those the reference vouches for: its own error estimate (the larger of its "
-            f"Richardson estimate from N = {coarse} and {fine} and of its run at N = {TIME_N} with {TIME_SPLIT} sub-steps per step "
-            f"against the same N in one increment, bench_general_random.reference_error) at most {VOUCH:g} of the width "
+            f"over all edges and over those the reference vouches for: its own error estimate ({own}, "
+            f"bench_general_random.reference_error) at most {VOUCH:g} of the width "
             f"(bench_general_random.VOUCH). Steps whose outermost stick edge is off by more than "
             f"{EVERY_STEP:g} of the width are sorted into classes (bench_general_random.EXCEEDANCE): the reference's "
             f"own error estimate is at least a third of that; the reference's outermost stick point is an island at "
