@@ -163,7 +163,7 @@ def machine():
                    f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}")
 
 
-def report(geometries, seeds, ns, general, command, split=1):
+def report(geometries, seeds, ns, general, command, time_split=1):
     hist = {}
     for g in geometries:
         for s in range(seeds):
@@ -241,16 +241,16 @@ def report(geometries, seeds, ns, general, command, split=1):
                   f"{est[0]:.1e}, 95th {est[1]:.1e}, max {est[2]:.1e} of the width; final dissipation "
                   f"{dis[-1] * fac_d:.1e} relative.", ""]
         order_rows[g] = (pe, pd)
-        timed = split > 1 and all(run_file(k[0], k[1], fine, split).exists() for k in keys)
+        timed = time_split > 1 and all(run_file(k[0], k[1], fine, time_split).exists() for k in keys)
         if timed:
-            lines += [f"The reference is N = {fine} with every step cut into {split} equal sub-steps (`baseline_run(..., "
-                      f"split={split})`): its own error per step is the larger of the Richardson estimate in space above "
-                      f"(from the single-increment runs) and the one in time, |x_{split} - x_1| / ({split} - 1) (first "
+            lines += [f"The reference is N = {fine} with every step cut into {time_split} equal sub-steps (`baseline_run(..., "
+                      f"split={time_split})`): its own error per step is the larger of the Richardson estimate in space above "
+                      f"(from the single-increment runs) and the one in time, |x_{time_split} - x_1| / ({time_split} - 1) (first "
                       "order in time: at N = 2000, 4 against 16 sub-steps differ 6-18x less than 1 against 4 at the 95th "
                       "percentile, docs/baseline_ic.md).", ""]
         for k in keys:
             r1, r2 = hist[k][fine], hist[k][levels[-2]]
-            r = dict(np.load(run_file(k[0], k[1], fine, split))) if timed else r1
+            r = dict(np.load(run_file(k[0], k[1], fine, time_split))) if timed else r1
             W = r["contact_right"] - r["contact_left"]
             pre = f"{k[0]}_{k[1]}_"
             for name in ("t", "P", "Q", "M", "sigma", "contact_left", "contact_right", "stick_left", "stick_right",
@@ -260,19 +260,19 @@ def report(geometries, seeds, ns, general, command, split=1):
                 space = np.abs(r1[side] - r2[side]) / W * fac_e
                 in_time = np.zeros_like(space)
                 if timed:
-                    in_time = np.abs(r[side] - r1[side]) / W / (split - 1)
+                    in_time = np.abs(r[side] - r1[side]) / W / (time_split - 1)
                     in_time[np.isfinite(r[side]) != np.isfinite(r1[side])] = np.inf  # a stick zone in one only
                 npz[pre + side + "_err"] = np.maximum(space, in_time)  # (NaN where the space estimate has none)
                 npz[pre + side + "_err_time"] = in_time
             space = np.abs(r1["dissipation"] - r2["dissipation"]) * fac_d
-            in_time = np.abs(r["dissipation"] - r1["dissipation"]) / (split - 1) if timed else 0.0 * space
+            in_time = np.abs(r["dissipation"] - r1["dissipation"]) / (time_split - 1) if timed else 0.0 * space
             npz[pre + "dissipation_err"] = space + in_time
             # Richardson in space on the reference's own value (the space error taken as the single-increment runs')
             npz[pre + "dissipation_extrapolated"] = r["dissipation"] + (r1["dissipation"] - r2["dissipation"]) * fac_d
             npz[pre + "order_edges"] = np.array(pe)
             npz[pre + "order_dissipation"] = np.array(pd)
             npz[pre + "n"] = np.array(fine)
-            npz[pre + "split"] = np.array(split if timed else 1)
+            npz[pre + "split"] = np.array(time_split if timed else 1)
     npz["levels"] = np.array(levels)
     OUT.parent.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(OUT, **npz)
@@ -291,7 +291,8 @@ def report(geometries, seeds, ns, general, command, split=1):
             if not path.exists() or (g, 0) not in hist:
                 continue
             gen = dict(np.load(path))
-            ref = hist[(g, 0)][fine]
+            timed = time_split > 1 and run_file(g, 0, fine, time_split).exists()
+            ref = dict(np.load(run_file(g, 0, fine, time_split))) if timed else hist[(g, 0)][fine]
             W = ref["contact_right"] - ref["contact_left"]
             m, p95, mx = stats(edge_diffs(gen, ref, W))
             m1 = stats(edge_diffs(dict(gen, intervals=np.ones_like(ref["intervals"])), ref, W, same_count=True))
