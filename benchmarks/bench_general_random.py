@@ -337,8 +337,7 @@ def write_doc(rows, args, argv):
             "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     ref = np.load(REFERENCE)
     fine, coarse = reference_levels(ref)
-    split = max(int(ref[k]) for k in ref.files if k.endswith("_split")) if any(
-        k.endswith("_split") for k in ref.files) else 1
+    split = max((int(ref[k]) for k in ref.files if k.endswith("_split")), default=1)
     if split > 1:
         run = f"its run at N = {fine} with every step cut into {split} sub-steps"
         own = (f"the larger of its Richardson estimate in space from N = {coarse} and {fine} (single-increment runs) "

@@ -1,6 +1,7 @@
 """Self-converged IC reference on the random histories of issue 14, and the current general solver against it.
 
-    python benchmarks/reference_random.py                       # 2 seeds per geometry, N = 1000..16000
+    python benchmarks/reference_random.py                       # 2 seeds per geometry, N = 1000..16000,
+                                                                # the finest cut in 4 sub-steps a step
     python benchmarks/reference_random.py --seeds 1 --n 1000 2000 --no-general
     python benchmarks/reference_random.py --report-only         # rebuild npz + docs from the cached runs
 
@@ -280,7 +281,8 @@ def report(geometries, seeds, ns, general, command, time_split=1):
     # the general solver
     if general:
         lines += ["**The package's current general solver** (`halfslip.simulate(scene)`, default nodes) against the "
-                  f"reference (N = {fine}); one history per geometry (the dataset has the outermost stick points, not the "
+                  f"reference (N = {fine}{f', {time_split} sub-steps a step' if time_split > 1 else ''}); one history per "
+                  "geometry (the dataset has the outermost stick points, not the "
                   "widest interval's: bench_general_random.py compares those):", "",
                   "| history | nodes | ms / step (the whole simulate) | outermost edge error median | 95th | max | same, steps where "
                   "the reference has one stick interval: median / 95th / max | steps with a stick zone in one "
@@ -342,7 +344,7 @@ def main(argv=None):
     ap.add_argument("--geometries", nargs="+", default=["hertz", "punch"])
     ap.add_argument("--no-general", action="store_true", help="skip the package's general solver")
     ap.add_argument("--report-only", action="store_true", help="use the cached runs only")
-    ap.add_argument("--split", type=int, default=1,
+    ap.add_argument("--split", type=int, default=4,
                     help="the reference: the finest N with every step cut into SPLIT sub-steps (its runs are made too)")
     ap.add_argument("--time-check", type=int, nargs=2, metavar=("N", "K"),
                     help="also run seed 0 of each geometry at N with every step cut into K sub-steps")
