@@ -35,6 +35,7 @@ sys.path.insert(0, str(HERE))
 
 from _doc import write_section  # noqa: E402
 from random_histories import random_history  # noqa: E402
+from reference_random import RUNS, run_file  # noqa: E402
 
 REFERENCE = HERE / "reference" / "random_reference.npz"
 DOC = ROOT / "docs" / "benchmarks.md"
@@ -105,9 +106,6 @@ def run_baseline(geometry, seed, n, repeat=1):
     return rec
 
 
-RUNS = HERE / "reference" / "runs"
-
-
 def reference_levels(ref):
     """The reference's finest N and the one below it (benchmarks/reference_random.py stores its levels)."""
     levels = sorted(int(n) for n in ref["levels"])
@@ -116,9 +114,7 @@ def reference_levels(ref):
 
 def main_errors(run, geometry, seed, ref):
     """Edges of the widest stick interval against the reference's finest run, / width."""
-    split = int(ref.get(f"{geometry}_{seed}_split", 1))
-    name = f"{geometry}_{seed}_{reference_levels(ref)[0]}" + (f"_t{split}" if split > 1 else "")
-    fine = np.load(RUNS / f"{name}.npz")
+    fine = np.load(run_file(geometry, seed, reference_levels(ref)[0], int(ref.get(f"{geometry}_{seed}_split", 1))))
     W = fine["contact_right"] - fine["contact_left"]
     out = []
     for side in ("main_left", "main_right"):
