@@ -7,7 +7,7 @@ the lattice alone, on the random histories and on the dovetail.
 Random histories (seeds 0, 1): the outermost stick points against benchmarks/reference/random_reference.npz
 (bench_general_random.compare), with and without windows, and the time per step (GeneralSolver.step alone).
 The dovetail (examples/dovetail.yaml, every step marched): the last cycle's outermost stick points against the
-lattice at ``--dovetail-reference`` nodes. ``--cells`` and ``--refine`` override the windows' size
+lattice at ``--dovetail-reference`` nodes. ``--cells`` and ``--refine`` (a row for each value given) override the windows' size
 (_windows.WINDOW_CELLS, REFINE) for a measurement.
 
 What the design measured before it was built (2026-11-28, then benchmarks/experiment_edge_windows.py): without
@@ -126,7 +126,8 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--nodes", type=int, nargs="*", default=[512, 1024], help="random histories at these nodes (none: the dovetail only)")
     ap.add_argument("--geometries", nargs="+", default=["punch", "hertz"])
-    ap.add_argument("--refine", type=int, help="fine cells per lattice cell (default: _windows.window_size's)")
+    ap.add_argument("--refine", type=int, nargs="+", default=[None],
+                    help="fine cells per lattice cell, one row each (default: _windows.window_size's)")
     ap.add_argument("--cells", type=int, help="lattice cells per window (default: _windows.window_size's)")
     ap.add_argument("--dovetail", type=int, nargs="*", default=[500, 1000, 2000, 4000],
                     help="nodes (against --dovetail-reference)")
@@ -141,11 +142,11 @@ def main(argv=None):
         random_run(g, 0, 64, True)
     for nodes in args.nodes:
         for g in args.geometries:
-            for windows in (False, True):
+            for windows, refine in [(False, None)] + [(True, r) for r in args.refine]:
                 vouched, every, failed, solved, wall, steps = [], [], 0, 0, 0.0, 0
                 estimates, misses, edges = [], 0, 0
                 for seed in (0, 1):
-                    run = _best(lambda: random_run(g, seed, nodes, windows, args.refine, args.cells), args.repeat,
+                    run = _best(lambda: random_run(g, seed, nodes, windows, refine, args.cells), args.repeat,
                                 lambda r: r["wall"])
                     e, v, *_ = compare(run, ref, f"{g}_{seed}_")
                     vouched.append(v)
@@ -164,9 +165,9 @@ def main(argv=None):
     if args.dovetail:
         reference, width, *_, spent, _, sure = dovetail_run(args.dovetail_reference, False)
         for nodes in args.dovetail:
-            for windows in (False, True):
+            for windows, refine in [(False, None)] + [(True, r) for r in args.refine]:
                 edges, _, wall, failed, solved, cycle, label, est = _best(
-                    lambda: dovetail_run(nodes, windows, args.refine, args.cells), args.repeat, lambda r: r[2])
+                    lambda: dovetail_run(nodes, windows, refine, args.cells), args.repeat, lambda r: r[2])
                 err = np.abs(edges - reference) / width
                 # (an edge the estimate misses: off by more than the estimate and the reference's own together)
                 worst = np.nanmax(err, axis=1)

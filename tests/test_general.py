@@ -792,6 +792,62 @@ def test_slip_zone_narrower_than_a_cell(kind, nodes):
     assert worst < 0.3, worst
 
 
+
+@pytest.mark.parametrize("kind", PROFILES)
+@pytest.mark.parametrize("windows", [False, True])
+def test_sub_cell_zones_at_receding_edges_against_exact(kind, windows):
+    """J3 with P falling slowly: (P0, 0.3 f P0) reached proportionally in 10 steps, then P down to 0.99 P0
+    in 20 steps along dQ/dP = 0.25 f and 0.35 f (both edges recede while slipping: zones of 3e-6 .. 2e-4
+    of the width, inside the end cell), at 512 nodes, against the exact method. The outermost stick
+    points of the zones narrower than 1.5 cells are within SUBCELL_PLACEMENT of the cell that placed them
+    (the lattice's, or the window's fine cell where a window reported the edge): the floor of their
+    estimate (0.3 since 0.4.9) is twice the largest error measured on the closed forms (0.068 of a cell
+    on the lattice, 0.146 of a fine cell on the windows; here 0.036 / 0.054 on the lattice and 0.127 /
+    0.071 on the windows, Hertz / punch,
+    benchmarks/subcell_exact.py). Every step's estimate covers its error."""
+    problem = NormalProblem(PROFILES[kind], A)
+    exact = ExactMemory(problem, F, 1.3 * P0)
+    general = GeneralSolver(problem, F, 512, edge_windows=windows)
+    worst = 0.0
+    for kp in (0.25, 0.35):
+        path = [(P0 * j / 10, 0.3 * F * P0 * j / 10) for j in range(1, 11)]
+        path += [(P0 * (1 - 0.01 * j / 20), 0.3 * F * P0 - kp * F * 0.01 * P0 * j / 20) for j in range(1, 21)]
+        for (sg, rg), (se, _) in zip(march(general, path), march(exact, path)):
+            assert rg.converged
+            W = se.contact_right - se.contact_left
+            errors = []
+            for side, got, want, edge in ((-1, sg.stick_left, se.stick_left, se.contact_left),
+                                          (1, sg.stick_right, se.stick_right, se.contact_right)):
+                cell = next((w.spacing for w in sg.memory.windows if w.side == side and got != w.lattice_edge),
+                            sg.memory.spacing)
+                errors.append(abs(got - want))
+                if abs(want - edge) < 1.5 * cell and abs(got - edge) < 1.5 * cell:
+                    worst = max(worst, abs(got - want) / cell)
+            assert max(errors) / W <= rg.error_estimate, (kp, max(errors) / W, rg.error_estimate)
+    assert 0.0 < worst <= general_module.SUBCELL_PLACEMENT, worst
+
+
+def test_an_end_cell_near_its_bound_places_its_zone_to_half_a_cell():
+    """_run_edges on 16 unit cells (Hertz's contact only for its edges): a stick run from the end cell, whose
+    contact edge (S1) says slips. The zone is put inside the end cell by the local form, to SUBCELL_PLACEMENT
+    of a cell; with the end cell within END_RATIO_ERROR of its bound (q = 0.97 of it) it may as well slip,
+    and the zone take the whole cell: half a cell."""
+    problem = NormalProblem(helpers.PROFILES["hertz"], A)
+    N = problem.solve(P0)
+    n = 16
+    x = N.left + np.arange(n) + 0.5
+    qmax = np.ones(n)
+    status = np.zeros(n, np.int8)
+    q = np.full(n, 0.3)
+    q[0] = 0.9
+    drives = ((1.0, 0.0), (0.0, 0.0))
+    left, _, placement = general_module._run_edges(x, q, qmax, status, N, 1.0, 0, n - 1, (True, False), drives, 0)
+    assert N.left < left <= x[0] + general_module.EDGE_INSIDE
+    assert placement == general_module.SUBCELL_PLACEMENT == 0.3
+    q[0] = 1.0 - 0.6 * general_module.END_RATIO_ERROR
+    placement = general_module._run_edges(x, q, qmax, status, N, 1.0, 0, n - 1, (True, False), drives, 0)[2]
+    assert placement == 0.5
+
 def test_slip_zone_of_about_a_cell():
     """A rounded punch under Q and sigma at 128 nodes: the slip zones grow from 0.1 to 1.2 cells, through
     the end cell. Where the end cell is the only slipping cell the edge is placed by the local

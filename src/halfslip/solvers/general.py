@@ -188,14 +188,23 @@ EPS = float(np.finfo(float).eps)
 EDGE_PLACEMENT = 0.1
 #: How well a slip zone of at most about a cell is placed, in cells: the floor of the edge error estimate
 #: where (S1) says a contact edge slips but its end cell sticks, or where the end cell alone slips (both
-#: placed by the local Cattaneo form, which reports it, _run_edges; the shadow lattice places them the same way, so the two
-#: lattices' distance says nothing there). Measured: J1 at Q = 0.001 .. 0.06 f P (60 loads, 128 / 256 /
-#: 1024 nodes, both profiles) at most 0.18 of a cell (0.085 with END_RULE_*, 0.3.7); J3 (receding edges,
-#: 512 nodes) 0.031; the dovetail (examples/dovetail.yaml, last cycle, 1000 nodes, against 16000) 0.21 at
-#: most, where 4000 - 16000 nodes disagree among themselves by 0.5 um (0.23 .. 0.48 until 0.3.7, which read
-#: the margins of receding edges against the wrong bound, _run_edges). Until 0.3.3 such steps were raised
-#: to a whole cell.
-SUBCELL_PLACEMENT = 0.5
+#: placed by the local Cattaneo form, which reports it, _run_edges; the shadow lattice places them the same
+#: way, so the two lattices' distance says nothing there), unless the outermost stick cell is within
+#: END_RATIO_ERROR of its bound (then half a cell). 0.3 since 0.4.9 (0.5 since 0.3.3, a whole cell before),
+#: twice the largest error measured against the exact method on zones under 1.5 cells (J1 / J2, J3 with P
+#: falling fast and slowly at dQ/dP = 0.25 .. 0.35 f from a proportional state at 0.3 f, the motor loop;
+#: both profiles at 256 / 512 / 1024 nodes, the lattice and its windows' fine cells: 0.068 of a cell on the
+#: lattice, 0.146 of a fine cell on the windows; J1 at Q = 0.001 .. 0.06 f P, 0.085 since END_RULE_*).
+#: The dovetail's receding left edge (examples/dovetail.yaml, every step marched, windows at 1000 nodes
+#: against the lattice at 16000) read 0.335 of a fine cell off where its end cell stood at 0.998 of its
+#: bound, the zone about to take the whole cell, and 0.3 where 4000, 8000 and 16000 nodes disagree among
+#: themselves by 0.66 of one (an ill-conditioned edge, docs/general_solver.md "Sub-cell zones").
+SUBCELL_PLACEMENT = 0.3
+#: How far from its bound an end cell's ratio q / (f cap) may be off: measured on proportional states (J3 with
+#: k' = k, 256 nodes, 0.3.9) 0.5 - 5 % of it. An outermost stick cell nearer its bound than this may as well
+#: slip, so a slip zone placed within it by the local form may reach its inner boundary: placed to half a cell
+#: (_run_edges), as a bracketed edge.
+END_RATIO_ERROR = 0.05
 #: The lattice's own response to a square-root stick edge (benchmarks/calibrate_edge_rule.py): with rho =
 #: m_k / m_(k-1) the traction margins f cap - s q of the outermost stick cell k and its inner neighbour,
 #: the stick edge lies u(rho) = polyval(EDGE_RULE, rho) cells outward of x_k (from -0.17 at rho = 0, where
@@ -1899,6 +1908,7 @@ def _run_edges_kernel(x, q, qmax, status, left, right, h, i, k, open_left, open_
         else:
             sgn = int(status[nb])
         m0 = 1.0 - sgn * q[end] / qmax[end] if qmax[end] > 0 else 0.0
+        near = m0 < END_RATIO_ERROR  # (the outermost stick cell may as well slip)
         inner = end + step
         if 0 <= inner < x.size and status[inner] == 0 and qmax[inner] > 0:
             m1 = 1.0 - sgn * q[inner] / qmax[inner]
@@ -1919,7 +1929,8 @@ def _run_edges_kernel(x, q, qmax, status, left, right, h, i, k, open_left, open_
             w_est, u_e = w / h, u0 / h - (0.0 if within else 1.0)
             w += h * _polyval2d(w_est, u_e, within_rule if within else end_rule)
             out[side] = edge + step * min(max(w, lower), u0 + EDGE_INSIDE * h)
-            placement[side] = max(placement[side], SUBCELL_PLACEMENT)
+            # (an outermost stick cell about to slip: the zone may reach its inner boundary, half a cell)
+            placement[side] = max(placement[side], 0.5 if near else SUBCELL_PLACEMENT)
             continue
         # the traction margin f cap - |q| vanishes like the square root of the distance to the stick edge,
         # and the lattice's response to that is EDGE_RULE
