@@ -44,7 +44,7 @@ def _march(solver, path):
 
     state, out = solver.initial_state(0.0), []
     for i, (P, Q) in enumerate(path):
-        state, report = solver.step(state, float(i + 1), Loads(P, Q, 0.0, 0.0))
+        state, _ = solver.step(state, float(i + 1), Loads(P, Q, 0.0, 0.0))
         out.append(state)
     return out
 
@@ -85,7 +85,7 @@ def subcell_errors(run, exact, windows: bool) -> np.ndarray:
 
 
 def closed_forms(nodes_list) -> list[str]:
-    from helpers import A, F, P0, PROFILES
+    from helpers import P0, PROFILES, A, F
 
     from halfslip.geometry import NormalProblem
     from halfslip.solvers.exact import ExactMemory

@@ -1840,7 +1840,8 @@ def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
                slipping=(False, False), drives=None, side: int | None = None) -> tuple[float, float, float]:
     """Edges of the stick run of cells i..k (the outermost stick points for the first and last stuck
     cells), within the cell, and how far either may be from where it is put, in cells, where that is
-    more than EDGE_PLACEMENT (SUBCELL_PLACEMENT at a contact edge, half a cell for a bracketed edge,
+    more than EDGE_PLACEMENT (SUBCELL_PLACEMENT at a contact edge, half a cell there where the outermost stick
+    cell is within END_RATIO_ERROR of its bound, half a cell for a bracketed edge,
     below; 0 otherwise); ``side`` 0 or 1: how far the left or the right one may be (None: either).
 
     Inside the contact the traction margin f cap - s q vanishes like the square root of the distance to
