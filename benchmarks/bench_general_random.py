@@ -35,7 +35,7 @@ sys.path.insert(0, str(HERE))
 
 from _doc import write_section  # noqa: E402
 from random_histories import random_history  # noqa: E402
-from reference_random import RUNS, run_file  # noqa: E402
+from reference_random import run_file  # noqa: E402
 
 REFERENCE = HERE / "reference" / "random_reference.npz"
 DOC = ROOT / "docs" / "benchmarks.md"
@@ -143,6 +143,12 @@ EXCEEDANCE = ("reference unsure", "reference edge island", "own edge island", "o
 VOUCH = 1e-4
 
 
+def _run_file(key, n, split=1):
+    """reference_random.run_file of the history ``key`` ("geometry_seed_")."""
+    geometry, seed = key.split("_")[:2]
+    return run_file(geometry, int(seed), n, split)
+
+
 def reference_error(ref, key):
     """{side: the reference's own error at each step's stick edge}, relative to the width, for "stick_left"
     and "stick_right": the larger of its convergence in space (Richardson from its two finest levels, stored
@@ -151,10 +157,11 @@ def reference_error(ref, key):
     a step that is off by up to half a 1024-node cell, seed 1 of the punch). A reference cut in time itself
     (reference_random.py --split) stores both in its estimate."""
     W = ref[key + "contact_right"] - ref[key + "contact_left"]
-    timed, single = RUNS / f"{key}{TIME_N}_t{TIME_SPLIT}.npz", RUNS / f"{key}{TIME_N}.npz"
-    runs = (np.load(timed), np.load(single)) if timed.exists() and single.exists() else None
-    if int(ref.get(key + "split", 1)) > 1:  # a reference cut in time carries its time error itself
-        runs = None
+    timed, single = _run_file(key, TIME_N, TIME_SPLIT), _run_file(key, TIME_N)
+    runs = None
+    # (a reference cut in time carries its time error itself)
+    if int(ref.get(key + "split", 1)) == 1 and timed.exists() and single.exists():
+        runs = (np.load(timed), np.load(single))
     out = {}
     for side in ("stick_left", "stick_right"):
         error = np.array(ref[key + side + "_err"], dtype=float)
@@ -204,7 +211,7 @@ def compare(run, ref, key):
     diss = abs(float(run["dissipation"][-1]) - d_ref) / d_ref
     # the reference takes each step as one increment (split at element arrivals only): against its run with
     # every step cut into TIME_SPLIT sub-steps at N = TIME_N, which the lattice's own sub-steps are closer to
-    timed = RUNS / f"{key}{TIME_N}_t{TIME_SPLIT}.npz"
+    timed = _run_file(key, TIME_N, TIME_SPLIT)
     diss_t = math.nan
     if timed.exists():
         d_t = float(np.load(timed)["dissipation"][-1])

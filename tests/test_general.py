@@ -792,7 +792,6 @@ def test_slip_zone_narrower_than_a_cell(kind, nodes):
     assert worst < 0.3, worst
 
 
-
 @pytest.mark.parametrize("kind", PROFILES)
 @pytest.mark.parametrize("windows", [False, True])
 def test_sub_cell_zones_at_receding_edges_against_exact(kind, windows):
@@ -847,6 +846,7 @@ def test_an_end_cell_near_its_bound_places_its_zone_to_half_a_cell():
     q[0] = 1.0 - 0.6 * general_module.END_RATIO_ERROR
     placement = general_module._run_edges(x, q, qmax, status, N, 1.0, 0, n - 1, (True, False), drives, 0)[2]
     assert placement == 0.5
+
 
 def test_slip_zone_of_about_a_cell():
     """A rounded punch under Q and sigma at 128 nodes: the slip zones grow from 0.1 to 1.2 cells, through
