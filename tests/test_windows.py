@@ -18,6 +18,7 @@ import dataclasses
 import functools
 import json
 import math
+import types
 
 import numpy as np
 import pytest
@@ -29,8 +30,8 @@ import halfslip.solvers.general as general
 from halfslip import io
 from halfslip.errors import HalfslipInputError
 from halfslip.solvers._toeplitz import kernel
-from halfslip.solvers._windows import (BUFFER, REFINE, WINDOW_CELLS, WINDOW_ITERATIONS, EdgeWindow, _active_set,
-                                       same_windows)
+from halfslip.solvers._windows import (BUFFER, REFINE, WINDOW_CELLS, WINDOW_ITERATIONS, EdgeWindow, EdgeWindows,
+                                       _active_set, same_windows)
 from halfslip.solvers.general import GeneralMemory, GeneralSolver
 from halfslip.state import Loads, Regime
 
@@ -454,6 +455,17 @@ def apart(a, b):
                 if math.isfinite(u - v)), default=0.0) / W
 
 
+def beyond(a, b):
+    """How far the windowed state ``b``'s outermost stick points lie from the lattice-alone state ``a``'s beyond
+    where that lattice placed them (each side's window's EdgeWindow.lattice_placement, in lattice cells), in
+    contact widths: what b's error estimate covers since 0.4.10 (EdgeWindows._own_error)."""
+    W = b.contact_right - b.contact_left
+    placed = {w.side: w.lattice_placement * b.memory.spacing for w in b.memory.windows}
+    return max((abs(u - v) - placed.get(side, 0.0) for side, u, v in (
+        (-1, a.stick_left, b.stick_left), (1, a.stick_right, b.stick_right)) if math.isfinite(u - v)),
+        default=0.0) / W
+
+
 #: Slack of "never worse than the lattice" at one step, in lattice cells: a window's edge is pulled by its cut-off
 #: inner end (the lattice's shear held fixed beyond it) as it nears the BUFFER cells there; measured worst
 #: 5.5e-3 cells (punch, 512 nodes, an edge 11.7 cells from the contact edge: window 1.2e-5, lattice 9.7e-7 of the
@@ -547,6 +559,38 @@ def test_the_estimate_covers_the_windows(kind, nodes):
             assert lower >= 5
         else:
             assert set_by_windows >= 1
+
+
+def own_error(edge, reach, lattice_edge, placed, regime=Regime.PARTIAL_SLIP, h=1.0):
+    """EdgeWindows._own_error of a window at ``edge`` (fine cells of h / REFINE) beside a lattice edge placed to
+    ``placed`` of its cells."""
+    windows = EdgeWindows.__new__(EdgeWindows)
+    windows.G = general
+    fine = types.SimpleNamespace(regime=regime)
+    return windows._own_error(edge, reach, h / REFINE, fine, lattice_edge, placed, h)
+
+
+def test_a_windows_estimate_counts_its_distance_beyond_the_lattices_placement():
+    """The window's own estimate (EdgeWindows._own_error, since 0.4.10): its distance from the lattice's edge
+    counts in whole where the lattice placed its edge by its rule (placement 0), and only beyond the lattice's
+    placement where that is a bracket (half a cell) or a sub-cell zone (SUBCELL_PLACEMENT); where the lattice
+    brackets its edge the window's is placed to half a fine cell at best; the floor EDGE_PLACEMENT of a fine cell
+    in partial slip, and the window's own placement (``reach`` fine cells) always stand."""
+    hf = 1.0 / REFINE
+    floor = general.EDGE_PLACEMENT * hf
+    # the lattice's rule: the whole distance
+    assert own_error(0.3, 0.0, 0.0, 0.0) == pytest.approx(0.3, rel=1e-15)
+    assert own_error(0.01, 0.0, 0.0, 0.0) == pytest.approx(floor, rel=1e-15)
+    assert own_error(0.01, 0.0, 0.0, 0.0, Regime.STICK) == pytest.approx(0.01, rel=1e-15)
+    # bracketed: nothing within the bracket, the rest beyond it, at least half a fine cell
+    assert own_error(0.45, 0.0, 0.0, 0.5) == pytest.approx(0.5 * hf, rel=1e-15)
+    assert own_error(-0.3, 0.0, 0.0, 0.5) == pytest.approx(0.5 * hf, rel=1e-15)
+    assert own_error(0.9, 0.0, 0.0, 0.5) == pytest.approx(0.4, rel=1e-12)
+    # a sub-cell zone's placement: within it only the window's own placement and the floor
+    placed = general.SUBCELL_PLACEMENT
+    assert own_error(0.2, 0.0, 0.0, placed) == pytest.approx(floor, rel=1e-15)
+    assert own_error(0.2, 0.7, 0.0, placed) == pytest.approx(0.7 * hf, rel=1e-15)
+    assert own_error(0.5, 0.0, 0.0, placed) == pytest.approx(0.5 - placed, rel=1e-12)
 
 
 # =============================================================================
@@ -720,9 +764,11 @@ def test_dovetail_with_windows_end_to_end():
     state's memory), no step failed, steady cycles are still skipped, the dissipation per cycle is within
     DOVETAIL_DISSIPATION_TOL of the lattice's at 4000 nodes and DOVETAIL_DISSIPATION_GAIN times closer to it than
     the lattice alone, the lattice's other outputs are the run's without windows (bitwise) on the steps both
-    marched, and the stick edges differ from the lattice's by at most each step's error estimate
-    (measured: at 155 of 211 steps, by up to 2.9e-4 of the width, at most 0.55 of the estimate). The stored
-    shear ``q`` and the station states are not compared: on the windows' cells they are the windows' (4fe595a)."""
+    marched, and the stick edges differ from the lattice's by at most the two runs' error estimates together
+    (the windows' counts their distance beyond the lattice's placement of its edge, which the lattice's covers;
+    measured in 0.4.9: at 155 of 211 steps, by up to 2.9e-4 of the width, at most 0.55 of the windows' estimate).
+    The stored shear ``q`` and the station states are not compared: on the windows' cells they are the windows'
+    (4fe595a)."""
     plain, ds = dovetail(False), dovetail(True)
     assert ds.attrs["method"] == "general" and ds.attrs["complete"] == 1
     assert (ds.attrs["solver_edge_windows"], plain.attrs["solver_edge_windows"]) == (1, 0)
@@ -742,8 +788,37 @@ def test_dovetail_with_windows_end_to_end():
     d = np.maximum(np.abs(b["stick_left"] - a["stick_left"]), np.abs(b["stick_right"] - a["stick_right"])).values / W
     slipping = np.isfinite(d)
     assert np.all(np.isfinite(a["stick_left"].values) == np.isfinite(b["stick_left"].values))
-    assert np.all(d[slipping] <= b["error_estimate"].values[slipping])
+    # (since 0.4.10 the windows' estimate counts their distance from the lattice's edge beyond the lattice's own
+    # placement of it, which the lattice alone's estimate covers)
+    assert np.all(d[slipping] <= b["error_estimate"].values[slipping] + a["error_estimate"].values[slipping])
     assert np.sum(d[slipping] > 0.0) >= 50  # the windows did move edges
+
+
+#: The short dovetail with windows at its 1000 nodes: the share of stored steps whose error estimate exceeds the
+#: scene's solver.tol (1e-4) at most: measured 3 of 211 (1.4 %) with REFINE 6 and the windows' distance from a
+#: bracketed lattice edge counted beyond the bracket (0.4.10); 28 of 211 (13 %) in 0.4.9 (REFINE 4, the whole
+#: distance).
+DOVETAIL_ABOVE_TOL = 0.03
+
+
+def test_dovetail_with_windows_meets_its_tolerance():
+    """The short dovetail with windows at its default 1000 nodes: at most DOVETAIL_ABOVE_TOL of the stored steps
+    report an error estimate above solver.tol, and the estimate is honest: at every stored step in partial slip
+    the outermost stick points lie within the step's estimate of the lattice's at 4000 nodes, together with
+    that run's own estimate (measured: at most 0.60 of the two)."""
+    ds, fine = dovetail(True), dovetail(False, 4000)
+    tol = ds.attrs["solver_tol"]
+    est = ds["error_estimate"].values
+    assert np.all(np.isfinite(est))
+    assert np.mean(est > tol) <= DOVETAIL_ABOVE_TOL, int(np.sum(est > tol))
+    common, i, j = np.intersect1d(fine["step"].values, ds["step"].values, return_indices=True)
+    assert common.size == ds["step"].size
+    a, b = fine.isel(t=i), ds.isel(t=j)
+    W = (b["contact_right"] - b["contact_left"]).values
+    d = np.maximum(np.abs(b["stick_left"] - a["stick_left"]), np.abs(b["stick_right"] - a["stick_right"])).values / W
+    slipping = np.isfinite(d)
+    assert np.sum(slipping) >= 200
+    assert np.all(d[slipping] <= b["error_estimate"].values[slipping] + a["error_estimate"].values[slipping])
 
 
 def test_dovetail_with_windows_resumes_to_the_same_result(tmp_path):
@@ -782,7 +857,7 @@ def test_windows_leave_the_lattices_sub_steps_alone():
     off). Checked: that step, and seeded random ramps (P, Q, M, sigma) on both profiles, where the lattice's
     every cell and the sub-step count are the same bitwise with and without windows, and the windowed run keeps
     the invariants (converged, dissipation non-decreasing, edges in the contact, |q| <= f p, the estimate at
-    least the windows' distance from the lattice's edges)."""
+    least the windows' distance from the lattice's edges beyond the lattice's placement of them)."""
     problem = problem_of("punch")
     path = [(P0, 0.0), (P0, 0.1 * F * P0), (1.002 * P0, 0.3220667936149144 * F * P0)]
     runs = []
@@ -818,7 +893,7 @@ def test_windows_leave_the_lattices_sub_steps_alone():
                 before = s1.dissipation
                 if math.isfinite(s1.stick_left):
                     assert s1.contact_left <= s1.stick_left <= s1.stick_right <= s1.contact_right
-                    assert apart(s0, s1) <= r1.error_estimate
+                    assert beyond(s0, s1) <= r1.error_estimate
                 if s1.memory.normal is not None:
                     x = np.linspace(s1.contact_left, s1.contact_right, 2001)
                     p, q = solver.tractions(s1.memory, x)

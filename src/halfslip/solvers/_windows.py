@@ -57,8 +57,11 @@ import numpy as np
 
 from .._geometry_kernels import pairwise_sum
 
-#: Fine cells per lattice cell in a window (fewer where a window would have more than MAX_FINE_CELLS).
-REFINE = 4
+#: Fine cells per lattice cell in a window (fewer where a window would have more than MAX_FINE_CELLS). Since 0.4.10
+#: 6 (4 before): at the default 1000 nodes (solver.tol 1e-4) half a fine cell, where an edge is only bracketed,
+#: is 8.3e-5 of the reference width, below the tolerance (1.25e-4 with 4: 21 % of the dovetail's steps reported
+#: above it, 1 % with 6; docs/general_solver.md, "Windows at the tolerance").
+REFINE = 6
 #: Lattice cells a window spans at each contact edge (the first and last cells of the contact), at least: a
 #: window spans WINDOW_WIDTH of the reference width (window_size).
 WINDOW_CELLS = 16
@@ -123,6 +126,11 @@ class EdgeWindow:
         What the window changed the take's dissipation by [J/m]: its fine cells' f (cap0 + cap) / 2 |slip|
         hf in place of the lattice's cells lo .. hi - 1 (0 where it did not converge or a slip zone reaches
         its cut: EdgeWindows._slip).
+    lattice_placement : float
+        How far the lattice's edge ``lattice_edge`` may be from where the lattice put it, in lattice cells
+        (_run_edges' placement: 0 placed by its rule, 0.3 a slip zone inside its end cell, 0.5 bracketed): the
+        window's error estimate counts its distance from that edge beyond it (EdgeWindows._own_error; since
+        0.4.10, 0 in a checkpoint from before, where the whole distance counted).
     """
 
     side: int
@@ -136,6 +144,7 @@ class EdgeWindow:
     hi: int
     lattice_edge: float
     dissipation: float
+    lattice_placement: float = 0.0
 
     def at(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(inside, j): which of the points ``x`` lie on the window's cells (its end cell reaching to the contact
@@ -210,7 +219,8 @@ class EdgeWindows:
         lattice_edge = float(fine.stick[(side + 1) // 2])
         if all_slip and not abs(lattice_edge - (N1.left if side < 0 else N1.right)) <= (
                 WC - BUFFER + REACH_MARGIN) * h:
-            return self._slipping(m1, side, j0, hf, cap, qmax, status, xf, lo, hi, lattice_edge), None, None
+            return self._slipping(m1, side, j0, hf, cap, qmax, status, xf, lo, hi, lattice_edge,
+                                  fine.placed[(side + 1) // 2]), None, None
         span = max(n, mem0.q.size) + abs(m1.first - mem0.first) + 2 * WC + 4
         tabs, span, tf = self._kernel_tables(h, span)
         ends1 = self._ends(m1, xf, ((lo, hi),))
@@ -227,7 +237,8 @@ class EdgeWindows:
                               hi)
         for a in (q, cap, status, G):
             a.flags.writeable = False
-        window = EdgeWindow(side, j0, hf, q, cap, status, G, lo, hi, lattice_edge, spent)
+        placed = fine.placed[(side + 1) // 2]
+        window = EdgeWindow(side, j0, hf, q, cap, status, G, lo, hi, lattice_edge, spent, placed)
         if not converged:
             self.failed += 1
             return window, None, None
@@ -242,10 +253,10 @@ class EdgeWindows:
         inner = (m1.first + hi) * h if side < 0 else (m1.first + lo) * h
         if edge is None or side * (inner - edge) > -BUFFER * h:  # (within BUFFER cells of the inner end: the cut's)
             return window, None, None
-        return window, edge, self._own_error(edge, reach, hf, fine, lattice_edge)
+        return window, edge, self._own_error(edge, reach, hf, fine, lattice_edge, placed, h)
 
     # -- the parts ------------------------------------------------------------------------------------------
-    def _slipping(self, m1, side, j0, hf, cap, qmax, status, xf, lo, hi, lattice_edge):
+    def _slipping(self, m1, side, j0, hf, cap, qmax, status, xf, lo, hi, lattice_edge, placed):
         """The window over lattice cells lo .. hi - 1 that all slip, the lattice's outermost stick point on its side
         beyond the window's reach (REACH_MARGIN): not solved. Its fine cells slip the way of their lattice cell at
         their bound, the history the next take's window on this side locks from (a solve's answer but where the
@@ -257,7 +268,7 @@ class EdgeWindows:
         G = np.interp(xf, m1.x, m1.G)
         for a in (q, cap, status, G):
             a.flags.writeable = False
-        return EdgeWindow(side, j0, hf, q, cap, status, G, lo, hi, lattice_edge, 0.0)
+        return EdgeWindow(side, j0, hf, q, cap, status, G, lo, hi, lattice_edge, 0.0, placed)
 
     def _slip(self, state, fine, side, kept, status, slip, cap, old, j0, xf, lo, hi):
         """(what the window changes the take's dissipation by, the slip accumulated at its fine cells): its fine
@@ -408,20 +419,34 @@ class EdgeWindows:
                                        (left, right), qtol, stol, (at,))
         return edge, max(placement, undecided)
 
-    def _own_error(self, edge, reach, hf, fine, lattice_edge):
+    def _own_error(self, edge, reach, hf, fine, lattice_edge, placed, h):
         """How far the window's edge ``edge`` may be from the converged one [m]: the larger of its distance from
-        the lattice's edge ``lattice_edge``, its placement on the fine cells (``reach`` fine cells, _run_edges'
-        placement and the undecided bands) and the placement floor EDGE_PLACEMENT of a fine cell (the two can
-        agree by chance).
+        the lattice's edge ``lattice_edge`` beyond how far that edge may be from where the lattice put it
+        (``placed`` lattice cells of ``h``: _run_edges' placement of it), its placement on the fine cells
+        (``reach`` fine cells, _run_edges' placement and the undecided bands) and the placement floor
+        EDGE_PLACEMENT of a fine cell (the two can agree by chance), half a fine cell where the lattice's edge
+        is bracketed.
 
         The distance is not divided by REFINE - 1, as Richardson's estimate of the finer of two first-order
         solutions would be: the window is not always the better one (an arrived fine cell that sticks as an
         island at the contact edge, a take's time step they share), and only their whole distance says so
         (measured on the random histories at 1024 nodes: a Hertz step 2.9e-4 of the width off where the
-        lattice was exact, covered by the distance, not by a third of it)."""
+        lattice was exact, covered by the distance, not by a third of it). But the lattice's edge says where
+        the converged one is only to its own placement: half a cell where it is bracketed, 0.3 of a cell where
+        a slip zone is placed inside its end cell; a window's edge within that says nothing against the window
+        (until 0.4.10 the whole distance counted: on the dovetail 44 of the 74 stored steps above `solver.tol`
+        were a window's edge within the lattice's bracket, 15 of them one fine cell from its midpoint).
+
+        Where the lattice brackets its edge (placement half a cell: a band of cells near their bound, whose
+        margin does not grow like the square root, or an outermost stick cell within END_RATIO_ERROR of its
+        bound) the band is the state's, and the window's cells in it are as near their bounds: its edge is
+        placed to half a fine cell at best, whatever its own rule says (on the punch's random histories two
+        window edges placed to the floor there were 0.2 and 0.4 of a fine cell off)."""
         G = self.G
-        apart = abs(edge - lattice_edge)
+        apart = max(abs(edge - lattice_edge) - placed * h, 0.0)
         floor = G.EDGE_PLACEMENT * hf if fine.regime == G.Regime.PARTIAL_SLIP else 0.0
+        if placed >= 0.5:
+            floor = max(floor, 0.5 * hf)
         return max(apart, reach * hf, floor)
 
 

@@ -362,6 +362,7 @@ class _Outcome:
     slip: np.ndarray | None = None  # each cell's slip in the take and its load at the take's start (the fine take's,
     cap0: np.ndarray | None = None  # with edge_windows: the windows take the dissipation of the cells they cover)
     undecided: tuple = (0.0, 0.0)  # with edge_windows: _undecided_reach at the outermost left / right stick edge
+    placed: tuple = (0.0, 0.0)  # with edge_windows: _run_edges' placement of the outermost left / right stick edge
     drives: tuple | None = None  # (S1)'s (u / f, v) at each contact edge where one slips, as _run_edges takes them
 
 
@@ -824,13 +825,13 @@ class GeneralSolver(TangentialSolver):
         slipping = _slipping_edges(drives, loads0, loads1, f) if drives is not None else (False, False)
         drives = tuple((u / f, v) for u, v in drives) if any(slipping) else None
         placement = 0.0
-        undecided = (0.0, 0.0)
+        undecided = placed = (0.0, 0.0)
         if slipped == 0:
             regime, edges = Regime.STICK, (N1.left, N1.right)
             if any(slipping):
                 # (S1): an edge slips, over less than its end cell (which sticks)
-                *edges, placement = _run_edges(x, q, qmax, status, N1, h, 0, n - 1, slipping, drives)
-                edges = tuple(edges)
+                *edges, placed = _run_edges_each(x, q, qmax, status, N1, h, 0, n - 1, slipping, drives)
+                edges, placement = tuple(edges), float(placed.max())
                 if edges != (N1.left, N1.right):
                     regime = Regime.PARTIAL_SLIP
             widest = edges
@@ -840,9 +841,9 @@ class GeneralSolver(TangentialSolver):
         else:
             runs = list(map(tuple, runs.tolist()))
             regime = Regime.PARTIAL_SLIP
-            *edges, placement = _run_edges(x, q, qmax, status, N1, h, runs[0][0], runs[-1][1] - 1, slipping,
-                                          drives)
-            edges = tuple(edges)
+            *edges, placed = _run_edges_each(x, q, qmax, status, N1, h, runs[0][0], runs[-1][1] - 1, slipping,
+                                             drives)
+            edges, placement = tuple(edges), float(placed.max())
             # cells beside the edges that are as much stuck as slipping (at the bound, not slipping); each side's
             # for the windows (whose edge does not replace an undecided one: EdgeWindows._window)
             by_side = self.windows is not None and not shadow
@@ -857,7 +858,8 @@ class GeneralSolver(TangentialSolver):
             else:  # the estimate covers the widest interval too (its spread over sub-steps, _finish)
                 *widest, inner = _run_edges(x, q, qmax, status, N1, h, a, b - 1, slipping, drives)
                 widest, placement = tuple(widest), max(placement, inner)
-        kept = (s, cap0, undecided) if self.windows is not None and not shadow else (None, None, (0.0, 0.0))
+        kept = ((s, cap0, undecided, (float(placed[0]), float(placed[1]))) if self.windows is not None and not shadow
+                else (None, None, (0.0, 0.0), (0.0, 0.0)))
         return _Outcome(memory, shift, dissipation, edges, widest, regime, slipped > 0, iterations, residual,
                         message, slipping, placement, *kept, drives)
 
@@ -1873,11 +1875,17 @@ def _run_edges(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int,
     (since 0.3.7: J1 at 256 nodes with the contact edge anywhere in its cell, largest error 0.085 / 0.055
     of a cell against 0.20 before; the random Hertz histories at 1024 nodes 95th percentile 1.1e-4 ->
     7.3e-5 of the width, the punch's 2.1e-4 -> 1.9e-4)."""
-    left, right, placements = _run_edges_kernel(x, q, qmax, status, float(N.left), float(N.right), h, i, k,
-                                                bool(slipping[0]), bool(slipping[1]), drives is not None,
-                                                _NO_DRIVES if drives is None else np.array(drives, dtype=float),
-                                                _END_RULES[True], _END_RULES[False])
+    left, right, placements = _run_edges_each(x, q, qmax, status, N, h, i, k, slipping, drives)
     return left, right, float(placements.max() if side is None else placements[side])
+
+
+def _run_edges_each(x, q, qmax, status, N: NormalSolution, h: float, i: int, k: int, slipping=(False, False),
+                    drives=None) -> tuple[float, float, np.ndarray]:
+    """:func:`_run_edges` with each side's placement (left, right), in cells."""
+    return _run_edges_kernel(x, q, qmax, status, float(N.left), float(N.right), h, i, k, bool(slipping[0]),
+                             bool(slipping[1]), drives is not None,
+                             _NO_DRIVES if drives is None else np.array(drives, dtype=float), _END_RULES[True],
+                             _END_RULES[False])
 
 
 @numba.njit(cache=True)
