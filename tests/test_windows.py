@@ -689,6 +689,29 @@ def test_a_memory_from_before_the_windows_decodes_without_them():
         io.decode_tree(missing, arrays)
 
 
+def test_a_checkpoint_from_0_4_9_resumes_with_the_new_windows():
+    """A state written by 0.4.9: its EdgeWindow records have no ``lattice_placement`` (decoded 0: the whole distance
+    from the lattice's edge counts) and stand on 4 fine cells a lattice cell; a solver of 0.4.10 (REFINE 6) goes on
+    from it, its windows locking from the lattice's state on its own fine cells (the old ones are not carried on),
+    converged, with windows on h / REFINE."""
+    old_solver = solver_of("punch", 256)
+    old_solver.windows = EdgeWindows(old_solver, general, 4, None)
+    state = march(old_solver, [(P0, 0.0), (P0, 0.2 * F * P0)])[-1][0]
+    assert state.memory.windows and all(w.spacing == state.memory.spacing / 4 for w in state.memory.windows)
+    arrays = []
+    tree = json.loads(json.dumps(io.encode_tree(state, arrays)))
+    for node in records(tree, "EdgeWindow"):
+        del node["fields"]["lattice_placement"]
+    back = io.decode_tree(tree, arrays)
+    assert [w.lattice_placement for w in back.memory.windows] == [0.0] * len(state.memory.windows)
+    solver = solver_of("punch", 256)
+    assert REFINE == 6
+    after, report = solver.step(back, 10.0, Loads(P0, 0.3 * F * P0, 0.0, 0.0))
+    assert report.converged and len(after.memory.windows) == 2
+    assert all(w.spacing == after.memory.spacing / REFINE for w in after.memory.windows)
+    assert math.isfinite(report.error_estimate)
+
+
 # =============================================================================
 # 7. the scene option
 # =============================================================================
