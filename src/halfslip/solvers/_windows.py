@@ -59,8 +59,9 @@ from .._geometry_kernels import pairwise_sum
 
 #: Fine cells per lattice cell in a window (fewer where a window would have more than MAX_FINE_CELLS). Since 0.4.10
 #: 6 (4 before): at the default 1000 nodes (solver.tol 1e-4) half a fine cell, where an edge is only bracketed,
-#: is 8.3e-5 of the reference width, below the tolerance (1.25e-4 with 4: 21 % of the dovetail's steps reported
-#: above it, 1 % with 6; docs/general_solver.md, "Windows at the tolerance").
+#: is 8.3e-5 of the reference width, below the tolerance (1.25e-4 with 4). With the estimate's distance counted
+#: beyond the lattice's own placement (EdgeWindows._own_error) 1 % of the dovetail's marched steps report an
+#: estimate above it, 23 % with 4 (docs/general_solver.md, "Windows at the tolerance").
 REFINE = 6
 #: Lattice cells a window spans at each contact edge (the first and last cells of the contact), at least: a
 #: window spans WINDOW_WIDTH of the reference width (window_size).
