@@ -29,9 +29,9 @@ import halfslip as hs
 import halfslip.solvers.general as general
 from halfslip import io
 from halfslip.errors import HalfslipInputError
-from halfslip.solvers._toeplitz import kernel
+from halfslip.solvers._toeplitz import ToeplitzLattice, kernel, window_active_set
 from halfslip.solvers._windows import (BUFFER, REFINE, WINDOW_CELLS, WINDOW_ITERATIONS, EdgeWindow, EdgeWindows,
-                                       _active_set, same_windows)
+                                       same_windows)
 from halfslip.solvers.general import GeneralMemory, GeneralSolver
 from halfslip.state import Loads, Regime
 
@@ -185,12 +185,18 @@ def test_kernel_tables_are_the_kernel():
     """EdgeWindows._kernel_tables: tabs[m, span + k] = t(k h + (m + 1/2) h / R - h / 2) of the lattice's cell
     (width h) and tf[k] = t(k h / R) of the fine cell (width h / R), at a few entries against kernel() and
     against the kernel written out (KERNEL_TOL); the two tables agree with each other (TELESCOPE_TOL); a wider
-    span grows the tables without changing their entries, a narrower one reuses them."""
+    span grows the tables without changing their entries, a narrower one reuses them. The fine kernel's Levinson
+    tables (the windows' active set, _toeplitz.window_active_set, since 0.4.10) are those of the same kernel in
+    another datum: tf - t_int is the one constant ``shift`` (to KERNEL_TOL of the entries), over as many fine
+    cells as a window has at most, and kept as the span grows."""
     solver = solver_of("punch", 256)
     windows = solver.windows
     h = 2.1e-6
     hf = h / REFINE
-    tabs, span, tf = windows._kernel_tables(h, 40)
+    tabs, span, tf, fine, shift = windows._kernel_tables(h, 40)
+    t_int = fine[0]
+    assert t_int.size >= REFINE * (windows.cells + 1)
+    assert float(np.max(np.abs(tf[:t_int.size] - t_int - shift))) <= KERNEL_TOL * float(np.max(np.abs(tf)))
     assert span >= 40 and tabs.shape == (REFINE, 2 * span + 1)
     assert tf.size >= REFINE * (span + WINDOW_CELLS) + 1
     worst = 0.0
@@ -206,7 +212,8 @@ def test_kernel_tables_are_the_kernel():
     telescoped = np.array([[sum(tf[abs(REFINE * k + m - mm)] for mm in range(REFINE)) for k in range(-span, span + 1)]
                            for m in range(REFINE)])
     assert float(np.max(np.abs(telescoped - tabs) / np.abs(tabs))) <= TELESCOPE_TOL
-    tabs2, span2, tf2 = windows._kernel_tables(h, 100)
+    tabs2, span2, tf2, fine2, shift2 = windows._kernel_tables(h, 100)
+    assert fine2 is fine and shift2 == shift
     assert span2 >= 100
     assert np.array_equal(tabs2[:, span2 - span:span2 + span + 1], tabs)
     assert np.array_equal(tf2[:tf.size], tf)
@@ -340,7 +347,7 @@ def test_window_compiled_parts_are_numpys_steps():
 # =============================================================================
 # 3. the dense active set
 # =============================================================================
-#: Optimality of _active_set's answer: stuck cells' g = lock, one offset c for all of them, relative to the
+#: Optimality of the windows' active set's answer: stuck cells' g = lock, one offset c for all of them, relative to the
 #: displacement one fine cell's largest shear makes (A qmax hf): measured <= 2.3e-14 (locks of 10x that);
 #: q against a planted answer, relative to max qmax: measured <= 2.4e-14 (T's condition number <= 500).
 KKT_TOL = 1e-11
@@ -351,9 +358,9 @@ FORCE_TOL = 1e-13
 def random_window(rng, planted):
     """(tf, T, gout, lock, qmax, force, hf, scale[, planted q, c, pattern]): a window of 16 .. 80 fine cells,
     T[i, j] = tf[|i - j|] from kernel() with a fine spacing of 0.2 .. 2 um (positive definite, checked), f p of
-    0.05 .. 1 x 6e7 Pa. ``planted``: gout from a chosen answer (a slip zone at one end, isolated slipping cells,
-    a stuck cell at least) through its optimality conditions with slip margins of 0.05 .. 1 x scale; else
-    gout and lock random (3 x scale) and a random force within the bounds."""
+    0.05 .. 1 x 6e7 Pa. ``planted``: gout from a chosen answer (a slip zone at one end, isolated slipping cells
+    unless ``planted`` is "run", a stuck cell at least) through its optimality conditions with slip margins of
+    0.05 .. 1 x scale; else gout and lock random (3 x scale) and a random force within the bounds."""
     n = int(rng.integers(16, 81))
     hf = 1e-6 * rng.uniform(0.2, 2.0)
     tf = kernel(np.arange(n + 2) * hf, hf, R_HERTZ, A)
@@ -366,7 +373,8 @@ def random_window(rng, planted):
         return tf, T, gout, lock, qmax, rng.uniform(-0.5, 0.5) * hf * qmax.sum(), hf, scale, None
     pattern = np.zeros(n, np.int8)
     pattern[:int(rng.integers(1, n // 2))] = rng.choice([-1, 1])
-    pattern[rng.random(n) < 0.15] = rng.choice([-1, 1])
+    if planted != "run":  # (a "run": the stuck cells are one run, the Toeplitz route of window_active_set)
+        pattern[rng.random(n) < 0.15] = rng.choice([-1, 1])
     pattern[int(rng.integers(n // 2, n))] = 0
     q = np.where(pattern != 0, pattern * qmax, rng.uniform(-0.9, 0.9, n) * qmax)
     c = scale * rng.normal()
@@ -376,22 +384,32 @@ def random_window(rng, planted):
     return tf, T, gout, lock, qmax, hf * float(q.sum()), hf, scale, (q, c, pattern)
 
 
-@pytest.mark.parametrize("planted", [True, False])
+def active_set(tf, gout, lock, qmax, force, hf, start, qtol, stol, max_iter):
+    """_toeplitz.window_active_set with the Levinson tables of the window's kernel in the internal datum of a
+    ToeplitzLattice and the datums' constant (as EdgeWindows._kernel_tables gives them)."""
+    fine = ToeplitzLattice(hf, gout.size, A)
+    return window_active_set(fine.tables, float(tf[0] - fine.t[0]), tf, gout, lock, qmax, force, hf, start, qtol,
+                             stol, max_iter)
+
+
+@pytest.mark.parametrize("planted", [True, "run", False])
 def test_active_set_meets_its_optimality_conditions(planted):
-    """_active_set on 6 random windows (seeded), from a stuck start and from a random one: converged; with c
+    """The windows' active set (_toeplitz.window_active_set: the stuck cells' solve by the fine kernel's
+    Toeplitz tables where they are one run, the planted "run" windows' answer, by LU elsewhere) on 6 random
+    windows (seeded), from a stuck start and from a random one: converged; with c
     recovered from the stuck cells (all give the same c: their g = lock, KKT_TOL), |q| <= qmax + its qtol,
     slipping cells carry exactly s qmax with s (g - lock) >= -its stol, stuck cells are within their bounds,
     and hf sum q = force (FORCE_TOL) with at least one stuck cell. Planted answers (the solution is unique: T
     is positive definite) come back: the pattern exactly, q and c to KKT_TOL. With one iteration from the
     stuck start the answer is reported not converged."""
-    rng = np.random.default_rng(20261129 + planted)
+    rng = np.random.default_rng(20261129 + {True: 1, False: 0, "run": 2}[planted])
     for _ in range(6):
         tf, T, gout, lock, qmax, force, hf, scale, plant = random_window(rng, planted)
         n = gout.size
         qtol, stol = 1e-10 * float(qmax.max()), 1e-10 * A * float(qmax.max()) * hf
         for start in (np.zeros(n, np.int8), rng.integers(-1, 2, n).astype(np.int8)):
-            q, c_said, status, converged = _active_set(tf, gout, lock, qmax, force, hf, start, qtol, stol,
-                                                       WINDOW_ITERATIONS)
+            q, c_said, status, converged = active_set(tf, gout, lock, qmax, force, hf, start, qtol, stol,
+                                                      WINDOW_ITERATIONS)
             assert converged
             stuck = status == 0
             slip = ~stuck
@@ -412,7 +430,7 @@ def test_active_set_meets_its_optimality_conditions(planted):
                 assert float(np.max(np.abs(q - q0))) <= KKT_TOL * float(qmax.max())
                 assert abs(c - c0) <= KKT_TOL * scale
         if planted:
-            assert not _active_set(tf, gout, lock, qmax, force, hf, np.zeros(n, np.int8), qtol, stol, 1)[3]
+            assert not active_set(tf, gout, lock, qmax, force, hf, np.zeros(n, np.int8), qtol, stol, 1)[3]
 
 
 # =============================================================================

@@ -13,7 +13,8 @@ on their own (a sub-model, one-way coupled to the lattice):
   outside the windows the state carries, those windows' own fine shear inside them: the windows keep their
   history, :attr:`GeneralMemory.windows`); cells that arrive in the take lock M1's increments, or, where the
   lattice's take slipped in part and sized its arrivals, the arrivals' shape with the lattice's size there;
-* the active set on the dense window (:func:`_active_set`: a pattern repeated or :data:`WINDOW_ITERATIONS`
+* the active set on the dense window (_toeplitz.window_active_set: its stuck cells solved by the fine kernel's
+  Toeplitz tables where they are one run, by LU otherwise; a pattern repeated or :data:`WINDOW_ITERATIONS`
   iterations: not converged, and that side keeps the lattice's edge);
 * its outermost stick point on its side, placed by the lattice's own rule (_run_edges) on the fine cells,
   replaces the lattice's, unless it falls within :data:`BUFFER` lattice cells of the window's inner end (there
@@ -36,8 +37,9 @@ they leave as it is), dissipation per cycle 0.31 % -> 0.06 % off (against 16000 
 machine than 0.4.6's 2.6 -> 4.9 and 0.57 -> 1.21.)
 
 A window is a handful of compiled calls (since 0.4.7; the same numbers as the numpy they replaced, to the last
-bit): :func:`_prologue` (bounds, pattern, centres, force), :func:`_solve_window` (drive and locks as displacements
-at the fine centres, :func:`_field`; the active set; the slip), :func:`_slip_parts` (dissipation, accumulated
+bit): :func:`_prologue` (bounds, pattern, centres, force), :func:`_drive_and_locks` (drive and locks as
+displacements at the fine centres, :func:`_field`), _toeplitz.window_active_set (since 0.4.10, in place of a dense
+LU in each iteration: the same answers to rounding), :func:`_window_slip`, :func:`_slip_parts` (dissipation, accumulated
 slip), :func:`_padded` and the lattice's _run_edges (the edge), general._fine_cell_loads (the loads, kept per
 contact, as are the end cells' columns at the fine centres); the dovetail's windows 0.86 -> 0.53 ms a step
 against 0.4.6 (A/B, one session).
@@ -56,6 +58,7 @@ import numba
 import numpy as np
 
 from .._geometry_kernels import pairwise_sum
+from ._toeplitz import ToeplitzLattice, kernel, window_active_set
 
 #: Fine cells per lattice cell in a window (fewer where a window would have more than MAX_FINE_CELLS). Since 0.4.10
 #: 6 (4 before): at the default 1000 nodes (solver.tol 1e-4) half a fine cell, where an edge is only bracketed,
@@ -223,17 +226,19 @@ class EdgeWindows:
             return self._slipping(m1, side, j0, hf, cap, qmax, status, xf, lo, hi, lattice_edge,
                                   fine.placed[(side + 1) // 2]), None, None
         span = max(n, mem0.q.size) + abs(m1.first - mem0.first) + 2 * WC + 4
-        tabs, span, tf = self._kernel_tables(h, span)
+        tabs, span, tf, fine_tab, datum_shift = self._kernel_tables(h, span)
         ends1 = self._ends(m1, xf, ((lo, hi),))
         ends0 = self._ends(mem0, xf, old.ranges)
         arrivals = self._arrivals(state, ctx, fine, side, xf, lo, hi)
         qtol, stol = 1e-10 * top, 1e-10 * S.A * top * hf
         self.solved += 1
         cut = (nf - BUFFER * R, nf) if side < 0 else (0, BUFFER * R)
-        q, _, status, converged, slip, cut_slips = _solve_window(
-            tabs, span, R, tf, j0, xf, hf, m1.first, m1.q, lo, hi, m1.shift, 0.25 * S.A * loads1.sigma, ends1,
-            mem0.first, mem0.q, old.exclude, mem0.shift, 0.25 * S.A * state.loads.sigma, old.first, old.start,
-            old.q, ends0, arrivals, qmax, force, status, qtol, stol, WINDOW_ITERATIONS, *cut)
+        gout, lock = _drive_and_locks(tabs, span, R, tf, j0, xf, m1.first, m1.q, lo, hi, m1.shift,
+                                      0.25 * S.A * loads1.sigma, ends1, mem0.first, mem0.q, old.exclude, mem0.shift,
+                                      0.25 * S.A * state.loads.sigma, old.first, old.start, old.q, ends0, arrivals)
+        q, c, status, converged = window_active_set(fine_tab, datum_shift, tf, gout, lock, qmax, force, hf, status,
+                                                    qtol, stol, WINDOW_ITERATIONS)
+        slip, cut_slips = _window_slip(tf, j0, q, c, status, gout, lock, *cut)
         spent, G = self._slip(state, fine, side, converged and not cut_slips, status, slip, cap, old, j0, xf, lo,
                               hi)
         for a in (q, cap, status, G):
@@ -290,21 +295,23 @@ class EdgeWindows:
                            old.first, old.start, old.G)
 
     def _kernel_tables(self, h, span):
-        """(tabs, span, tf): the lattice's kernel at the REFINE fine offsets within a cell over +- span cells
-        (``tabs[m, span + k]`` = t(k h + (m + 1/2) h / R - h / 2)), and the fine kernel over R (span + cells)
-        fine cells (package datum)."""
+        """(tabs, span, tf, fine tables, datum shift): the lattice's kernel at the REFINE fine offsets within a cell
+        over +- span cells (``tabs[m, span + k]`` = t(k h + (m + 1/2) h / R - h / 2)), the fine kernel over R (span
+        + cells) fine cells (package datum), and the Levinson tables of the fine kernel in the internal datum of a
+        ToeplitzLattice of as many cells as a window has at most, with tf - t_int (the datums' constant) for the
+        window's active set (_toeplitz.window_active_set)."""
         got = self._tables.get(h)
         if got is None or got[1] < span:
-            from ._toeplitz import kernel
-
             S, R = self.solver, self.refine
             span = max(span, 2 * (got[1] if got else 0))
             k = np.arange(-span, span + 1)
             hf = h / R
             tabs = np.array([kernel(k * h + (m + 0.5) * hf - 0.5 * h, h, S.datum, S.A) for m in range(R)])
             tf = kernel(np.arange(R * (span + self.cells) + 2) * hf, hf, S.datum, S.A)
-            got = self._tables[h] = (tabs, span, tf)
-        return got
+            fine = got[3] if got is not None else ToeplitzLattice(hf, R * (self.cells + 1) + 2, S.A)
+            got = self._tables[h] = (tabs, span, tf, fine, float(tf[0] - fine.t[0]))
+        tabs, span, tf, fine, shift = got
+        return tabs, span, tf, fine.tables, shift
 
     def _loads(self, N, hf, j0, j1):
         """(1/hf) int p over the fine cells j0 .. j1, the one at a contact edge reaching to it: _Load's closed form
@@ -559,15 +566,12 @@ def _field(tabs, span, R, tf, j0, xf, first, q, exclude, shift, bulk, wfirst, ws
 
 
 @numba.njit(cache=True)
-def _solve_window(tabs, span, R, tf, j0, xf, hf, first1, q1, lo, hi, shift1, bulk1, ends1, first0, q0, exclude0,
-                  shift0, bulk0, wfirst, wstart, wq, ends0, arrivals, qmax, force, status, qtol, stol, max_iter,
-                  cut0, cut1):  # pragma: no cover - compiled
-    """A window's take in one call (EdgeWindows._window): its drive (the take's state, its own cells lo .. hi - 1
-    left out: :func:`_field`) and locks (the state at the take's start with its old windows, plus the
-    ``arrivals``' increments where given), the active set (:func:`_active_set`) and each fine cell's slip in
-    the take (its displacement less its lock, 0 where it sticks). Returns q, c, the pattern, whether it
-    converged, the slip and whether any of the fine cells cut0 .. cut1 - 1 (those within BUFFER lattice cells of
-    the window's inner end) slips."""
+def _drive_and_locks(tabs, span, R, tf, j0, xf, first1, q1, lo, hi, shift1, bulk1, ends1, first0, q0, exclude0,
+                     shift0, bulk0, wfirst, wstart, wq, ends0, arrivals):  # pragma: no cover - compiled
+    """A window's drive (the take's state, its own cells lo .. hi - 1 left out: :func:`_field`) and locks (the
+    state at the take's start with its old windows, plus the ``arrivals``' increments where given), as
+    displacements at the fine centres ``xf`` (EdgeWindows._window; its active set is _toeplitz's
+    window_active_set, then :func:`_window_slip`)."""
     nf = xf.size
     gout = _field(tabs, span, R, tf, j0, xf, first1, q1, np.array([[lo, hi]], np.int64), shift1, bulk1, wfirst[:0],
                   wstart[:1], wq[:0], ends1)
@@ -575,7 +579,15 @@ def _solve_window(tabs, span, R, tf, j0, xf, hf, first1, q1, lo, hi, shift1, bul
     if arrivals.size:
         for i in range(nf):
             lock[i] += arrivals[i]
-    q, c, status, converged = _active_set(tf, gout, lock, qmax, force, hf, status, qtol, stol, max_iter)
+    return gout, lock
+
+
+@numba.njit(cache=True)
+def _window_slip(tf, j0, q, c, status, gout, lock, cut0, cut1):  # pragma: no cover - compiled
+    """Each fine cell's slip in the take after the window's active set (its displacement less its lock, 0 where
+    it sticks) and whether any of the fine cells cut0 .. cut1 - 1 (those within BUFFER lattice cells of the
+    window's inner end) slips."""
+    nf = q.size
     own = _fine_products(tf, j0, nf, j0, q)
     slip = np.zeros(nf)
     for i in range(nf):
@@ -584,7 +596,7 @@ def _solve_window(tabs, span, R, tf, j0, xf, hf, first1, q1, lo, hi, shift1, bul
     cut_slips = False
     for i in range(cut0, cut1):
         cut_slips = cut_slips or status[i] != 0
-    return q, c, status, converged, slip, cut_slips
+    return slip, cut_slips
 
 
 @numba.njit(cache=True)
@@ -683,71 +695,3 @@ def _fine_products(tf, rows0, n_rows, cols0, q):  # pragma: no cover - compiled
             total += tf[abs(rows0 + i - cols0 - j)] * q[j]
         out[i] = total
     return out
-
-
-@numba.njit(cache=True)
-def _active_set(tf, gout, lock, qmax, force, hf, status, qtol, stol, max_iter):  # pragma: no cover - compiled
-    """The window's active set (dense): g = gout + c - T q with T[i, j] = tf[|i - j|]; stuck cells g = lock,
-    slipping ones q = s qmax with s (g - lock) >= 0; hf sum q = force, the offset c free. Returns q, c, the
-    pattern and whether it converged (a pattern repeated or max_iter iterations: not)."""
-    n = gout.size
-    status = status.copy()
-    seen = np.empty((max_iter, n), np.int8)
-    q = np.zeros(n)
-    c = 0.0
-    for it in range(max_iter):
-        k = 0
-        for i in range(n):
-            if status[i] == 0:
-                k += 1
-        idx = np.empty(k, np.int64)
-        k = 0
-        for i in range(n):
-            q[i] = 0.0 if status[i] == 0 else status[i] * qmax[i]
-            if status[i] == 0:
-                idx[k] = i
-                k += 1
-        if k > 0:
-            M = np.zeros((k + 1, k + 1))
-            b = np.empty(k + 1)
-            rest = force
-            for i in range(n):
-                rest -= hf * q[i]
-            for a in range(k):
-                i = idx[a]
-                acc = gout[i] - lock[i]
-                for j in range(n):
-                    if status[j] != 0:
-                        acc -= tf[abs(i - j)] * q[j]
-                b[a] = acc
-                for e in range(k):
-                    M[a, e] = tf[abs(i - idx[e])]
-                M[a, k] = -1.0
-                M[k, a] = hf
-            b[k] = rest
-            sol = np.linalg.solve(M, b)
-            for a in range(k):
-                q[idx[a]] = sol[a]
-            c = sol[k]
-        new = status.copy()
-        same = True
-        for i in range(n):
-            if status[i] == 0:
-                if abs(q[i]) > qmax[i] + qtol:
-                    new[i] = 1 if q[i] > 0 else -1
-                    same = False
-            else:
-                g = gout[i] + c - lock[i]
-                for j in range(n):
-                    g -= tf[abs(i - j)] * q[j]
-                if status[i] * g < -stol:
-                    new[i] = 0
-                    same = False
-        if same:
-            return q, c, status, True
-        for r in range(it):
-            if np.array_equal(seen[r], new):
-                return q, c, status, False
-        seen[it] = new
-        status = new
-    return q, c, status, False
