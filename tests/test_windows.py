@@ -466,22 +466,21 @@ def edge_error(state, c):
     return max(abs(state.stick_left + c), abs(state.stick_right - c)) / W
 
 
-def apart(a, b):
-    """How far apart two states' outermost stick points are, in contact widths (the windows' _finish form)."""
+def apart(a, b, placed=None):
+    """How far apart two states' outermost stick points are, in contact widths (the windows' _finish form); with
+    ``placed`` ({side: m}), each side's beyond its m."""
     W = b.contact_right - b.contact_left
-    return max((abs(u - v) for u, v in ((a.stick_left, b.stick_left), (a.stick_right, b.stick_right))
-                if math.isfinite(u - v)), default=0.0) / W
+    placed = placed or {}
+    return max((abs(u - v) - placed.get(side, 0.0) for side, u, v in (
+        (-1, a.stick_left, b.stick_left), (1, a.stick_right, b.stick_right)) if math.isfinite(u - v)),
+        default=0.0) / W
 
 
 def beyond(a, b):
     """How far the windowed state ``b``'s outermost stick points lie from the lattice-alone state ``a``'s beyond
     where that lattice placed them (each side's window's EdgeWindow.lattice_placement, in lattice cells), in
     contact widths: what b's error estimate covers since 0.4.10 (EdgeWindows._own_error)."""
-    W = b.contact_right - b.contact_left
-    placed = {w.side: w.lattice_placement * b.memory.spacing for w in b.memory.windows}
-    return max((abs(u - v) - placed.get(side, 0.0) for side, u, v in (
-        (-1, a.stick_left, b.stick_left), (1, a.stick_right, b.stick_right)) if math.isfinite(u - v)),
-        default=0.0) / W
+    return apart(a, b, {w.side: w.lattice_placement * b.memory.spacing for w in b.memory.windows})
 
 
 #: Slack of "never worse than the lattice" at one step, in lattice cells: a window's edge is pulled by its cut-off

@@ -1267,20 +1267,23 @@ def window_active_set(tab, shift, tf, gout, lock, qmax, force, hf, status, qtol,
                 for a in range(k):
                     q[idx[a]] = sol[a]
                 c = sol[k]
-        new = status.copy()
-        same = True
+        s = np.zeros(n)  # the slipping cells' slip g - lock (the stuck cells' is not read)
         for i in range(n):
-            if status[i] == 0:
-                if abs(q[i]) > qmax[i] + qtol:
-                    new[i] = 1 if q[i] > 0 else -1
-                    same = False
-            else:
+            if status[i] != 0:
                 g = gout[i] + c - lock[i]
                 for j in range(n):
                     g -= tf[abs(i - j)] * q[j]
-                if status[i] * g < -stol:
-                    new[i] = 0
-                    same = False
+                s[i] = g
+        over, back = flips(q, s, status, qmax, qtol, stol)  # (the lattice's rule)
+        new = status.copy()
+        same = True
+        for i in range(n):
+            if over[i]:
+                new[i] = 1 if q[i] > 0 else -1
+                same = False
+            elif back[i]:
+                new[i] = 0
+                same = False
         if same:
             return q, c, status, True
         for r in range(it):

@@ -220,11 +220,10 @@ class EdgeWindows:
         cap = self._loads(N1, hf, j0, j1)
         qmax, status, xf, force, top, all_slip = _prologue(S.f, cap, R, j0, j1, hf, h, m1.first, lo, hi, m1.status,
                                                            m1.q)
-        lattice_edge = float(fine.stick[(side + 1) // 2])
+        lattice_edge, placed = float(fine.stick[(side + 1) // 2]), fine.placed[(side + 1) // 2]
         if all_slip and not abs(lattice_edge - (N1.left if side < 0 else N1.right)) <= (
                 WC - BUFFER + REACH_MARGIN) * h:
-            return self._slipping(m1, side, j0, hf, cap, qmax, status, xf, lo, hi, lattice_edge,
-                                  fine.placed[(side + 1) // 2]), None, None
+            return self._slipping(m1, side, j0, hf, cap, qmax, status, xf, lo, hi, lattice_edge, placed), None, None
         span = max(n, mem0.q.size) + abs(m1.first - mem0.first) + 2 * WC + 4
         tabs, span, tf, fine_tab, datum_shift = self._kernel_tables(h, span)
         ends1 = self._ends(m1, xf, ((lo, hi),))
@@ -243,7 +242,6 @@ class EdgeWindows:
                               hi)
         for a in (q, cap, status, G):
             a.flags.writeable = False
-        placed = fine.placed[(side + 1) // 2]
         window = EdgeWindow(side, j0, hf, q, cap, status, G, lo, hi, lattice_edge, spent, placed)
         if not converged:
             self.failed += 1
