@@ -48,6 +48,17 @@ The estimate: where both outermost stick points are the windows' (and bound the 
 the step's error estimate is the windows' own (:meth:`EdgeWindows._own_error`: each edge's distance from the
 lattice's, its placement on the fine cells, the floor of a fine cell); elsewhere the lattice's, at least the
 windows' distance from it. Either way a window's edge far from the lattice's says so.
+
+Check windows (since 0.4.11, :data:`CHECKS`): where a side's outermost stick point stays the lattice's (inside the
+contact, beyond the windows' reach), a window of the same cells is solved around it (:meth:`EdgeWindows._check`:
+both its ends cuts, its stuck cells' locks from the state at the take's start with the lattice cells' wiggle taken
+out, :func:`_smooth_locks`) and not kept: it measures where the lattice put its edge. That side's estimate is then
+the check's distance from the lattice's edge and its own placement together, at least the two lattices' distance
+on that side (GeneralSolver._finish), in place of the lattice's placement floor (EDGE_PLACEMENT of a lattice
+cell), which set 90 % of the random histories' estimates above `solver.tol` at the default resolution. Kept as
+moving windows (their edges reported, the first design) they came out worse than the lattice on the rounded punch
+(docs/general_solver.md, "Check windows"): a window that moves inherits the lattice's history, so it can check
+its edge but not improve on it.
 """
 from __future__ import annotations
 
@@ -89,6 +100,9 @@ BUFFER = 4
 #: it, restarting from the lattice's shear, the punch's J2 edge 1.3 cells from the contact edge came out 2.2e-4
 #: of the width off against the lattice's 3.2e-5).
 REACH_MARGIN = 0.5
+#: A window solved around the lattice's outermost stick point where it lies beyond the contact edges' windows'
+#: reach, to check the lattice's edge (EdgeWindows._check; since 0.4.11).
+CHECKS = True
 #: Active-set iterations at most for a window.
 WINDOW_ITERATIONS = 60
 #: The rounding a window's cell loads may take from _Load's closed form, relative to a fine cell's mean load
@@ -181,47 +195,75 @@ class EdgeWindows:
         # neither P nor M keeps its contact): the solver's own kind of store, as many as its loads
         self._cell_loads = general._Kept(general.LOADS_KEPT)
         self._columns = general._Kept(general.LOADS_KEPT)  # the end cells' columns at a window's fine centres
-        self.solved = self.failed = self.skipped = 0
+        self.solved = self.failed = self.skipped = self.checked = 0
 
     # -- one take ---------------------------------------------------------------------------------------------
-    def solve(self, state, loads1, ctx, fine) -> tuple[tuple, list, list]:
-        """The windows after the fine take ``fine`` from ``state`` (``ctx`` its _Context): (windows, edges, errors)
-        with edges [left, right] the outermost stick points, the lattice's where a window has none of its own,
-        and errors [left, right] how far each window's own edge may be from the converged one [m] (:meth:`_own_error`;
-        None where the edge is the lattice's)."""
-        windows, edges, errors = [], [fine.stick[0], fine.stick[1]], [None, None]
+    def solve(self, state, loads1, ctx, fine, check=True) -> tuple[tuple, list, list, list]:
+        """The windows after the fine take ``fine`` from ``state`` (``ctx`` its _Context): (windows, edges, errors,
+        checks) with edges [left, right] the outermost stick points, the lattice's where a window has none of its
+        own, errors [left, right] how far each window's own edge may be from the converged one [m]
+        (:meth:`_own_error`; None where the edge is the lattice's), and checks [left, right] where the lattice's
+        edge stands, the outermost stick point of a window solved around it (:meth:`_check`, where ``check``) and
+        how far its placement on the fine cells may leave it [m], else None."""
+        windows, edges, errors, checks = [], [fine.stick[0], fine.stick[1]], [None, None], [None, None]
+        m1, mem0 = fine.memory, state.memory
+        if m1.q.size < 2 * self.cells + 4 or mem0.normal is None or mem0.spacing != ctx.h:
+            return (), edges, errors, checks
         old = _Old(tuple(w for w in state.memory.windows if w.spacing == ctx.h / self.refine))
+        WC = self.cells
         for s, side in enumerate((-1, 1)):
-            got = self._window(state, loads1, ctx, fine, side, old)
-            if got is not None:
-                window, edge, error = got
-                windows.append(window)
-                if edge is not None:
-                    edges[s], errors[s] = edge, error
-        return tuple(windows), edges, errors
+            window, edge, error = self._window(state, loads1, ctx, fine, side, old,
+                                               *((0, WC) if side < 0 else (m1.q.size - WC, m1.q.size)))
+            windows.append(window)
+            if edge is not None:
+                edges[s], errors[s] = edge, error
+            elif check and CHECKS:
+                checks[s] = self._check(state, loads1, ctx, fine, side, old)
+        return tuple(windows), edges, errors, checks
 
-    def _window(self, state, loads1, ctx, fine, side, old):
-        """The window at the left (side -1) or right contact edge after the take ``fine`` (``old``: the state's
+    def _check(self, state, loads1, ctx, fine, side, old):
+        """Where the contact edge's window gives no outermost stick point on ``side`` (the lattice's beyond its reach,
+        or within BUFFER cells of its cut), a window of WINDOW_CELLS cells centred on the lattice's cell of it,
+        inside the contact by a cell at both ends of the take (its ends both cuts; its stuck fine cells' locks
+        smoothed, :func:`_smooth_locks`): (its outermost stick point, how far its placement on the fine cells may
+        leave it [m], :meth:`_placement`), None where it has none away from its cuts, did not converge or there is
+        no room, or the lattice left cells beside its edge undecided (a load extreme, whose band the lattice's
+        estimate speaks for). Not kept: it checks the lattice's edge, whose history it inherits (the step's
+        estimate, GeneralSolver._finish)."""
+        WC, h, N1, m1, N0 = self.cells, ctx.h, ctx.N1, fine.memory, state.memory.normal
+        n = m1.q.size
+        edge = fine.stick[(side + 1) // 2]
+        if (fine.regime != self.G.Regime.PARTIAL_SLIP or not math.isfinite(edge)
+                or fine.undecided[(side + 1) // 2] > 0.0):
+            return None
+        c = int(math.floor(edge / h)) - m1.first  # the lattice's cell of its edge
+        lo = c - WC // 2 + (1 if side > 0 else 0)
+        hi = lo + WC
+        if not (1 <= lo and hi <= n - 1 and (m1.first + lo) * h >= max(N0.left, N1.left) + h
+                and (m1.first + hi) * h <= min(N0.right, N1.right) - h):
+            return None
+        self.checked += 1
+        _, edge, error = self._window(state, loads1, ctx, fine, side, old, lo, hi, interior=True)
+        return None if edge is None else (edge, error)
+
+    def _window(self, state, loads1, ctx, fine, side, old, lo, hi, interior=False):
+        """The window over the lattice's cells lo .. hi - 1 at the left (side -1) or right contact edge, or, where
+        ``interior``, at the outermost stick point on that side after the take ``fine`` (``old``: the state's
         windows on the same fine cells, :class:`_Old`): (its EdgeWindow, its outermost stick point or None, that
-        point's own error estimate [m] or None), None where the contact is too small or new."""
+        point's own error estimate [m] or None); at a contact edge where all its lattice cells slip and the
+        lattice's edge on its side lies beyond its reach (REACH_MARGIN), not solved (:meth:`_slipping`)."""
         S, R, WC = self.solver, self.refine, self.cells
         h, N1, m1, mem0 = ctx.h, ctx.N1, fine.memory, state.memory
-        n, N0 = m1.q.size, mem0.normal
-        if n < 2 * WC + 4 or N0 is None or mem0.spacing != h:
-            return None
+        n = m1.q.size
         hf = h / R
-        if side < 0:
-            lo, hi = 0, WC
-            j0, j1 = math.ceil(N1.left / hf - 0.5), R * (m1.first + WC) - 1
-        else:
-            lo, hi = n - WC, n
-            j0, j1 = R * (m1.first + n - WC), math.floor(N1.right / hf - 0.5)
+        j0 = R * (m1.first + lo) if interior or side > 0 else math.ceil(N1.left / hf - 0.5)
+        j1 = R * (m1.first + hi) - 1 if interior or side < 0 else math.floor(N1.right / hf - 0.5)
         nf = j1 - j0 + 1
         cap = self._loads(N1, hf, j0, j1)
         qmax, status, xf, force, top, all_slip = _prologue(S.f, cap, R, j0, j1, hf, h, m1.first, lo, hi, m1.status,
                                                            m1.q)
         lattice_edge, placed = float(fine.stick[(side + 1) // 2]), fine.placed[(side + 1) // 2]
-        if all_slip and not abs(lattice_edge - (N1.left if side < 0 else N1.right)) <= (
+        if not interior and all_slip and not abs(lattice_edge - (N1.left if side < 0 else N1.right)) <= (
                 WC - BUFFER + REACH_MARGIN) * h:
             return self._slipping(m1, side, j0, hf, cap, qmax, status, xf, lo, hi, lattice_edge, placed), None, None
         span = max(n, mem0.q.size) + abs(m1.first - mem0.first) + 2 * WC + 4
@@ -230,21 +272,24 @@ class EdgeWindows:
         ends0 = self._ends(mem0, xf, old.ranges)
         arrivals = self._arrivals(state, ctx, fine, side, xf, lo, hi)
         qtol, stol = 1e-10 * top, 1e-10 * S.A * top * hf
-        self.solved += 1
+        if not interior:  # (a check counts in ``checked``, EdgeWindows._check)
+            self.solved += 1
         cut = (nf - BUFFER * R, nf) if side < 0 else (0, BUFFER * R)
         gout, lock = _drive_and_locks(tabs, span, R, tf, j0, xf, m1.first, m1.q, lo, hi, m1.shift,
                                       0.25 * S.A * loads1.sigma, ends1, mem0.first, mem0.q, old.exclude, mem0.shift,
                                       0.25 * S.A * state.loads.sigma, old.first, old.start, old.q, ends0, arrivals)
+        if interior:
+            lock = _smooth_locks(lock, j0, R, mem0.first, mem0.q.size, old.first, old.start)
         q, c, status, converged = window_active_set(fine_tab, datum_shift, tf, gout, lock, qmax, force, hf, status,
                                                     qtol, stol, WINDOW_ITERATIONS)
         slip, cut_slips = _window_slip(tf, j0, q, c, status, gout, lock, *cut)
-        spent, G = self._slip(state, fine, side, converged and not cut_slips, status, slip, cap, old, j0, xf, lo,
-                              hi)
+        spent, G = self._slip(state, fine, side, converged and not cut_slips and not interior, status, slip, cap,
+                              old, j0, xf, lo, hi)
         for a in (q, cap, status, G):
             a.flags.writeable = False
         window = EdgeWindow(side, j0, hf, q, cap, status, G, lo, hi, lattice_edge, spent, placed)
         if not converged:
-            self.failed += 1
+            self.failed += not interior
             return window, None, None
         if fine.undecided[(side + 1) // 2] > 0.0:
             # the lattice left cells beside its edge undecided (at their bound, not slipping: a load extreme): the
@@ -253,10 +298,14 @@ class EdgeWindows:
             # 1024 nodes: 4 cells farther in than the lattice's edge and SS1's); the lattice's edge and estimate
             # stand, which say so
             return window, None, None
-        edge, reach = self._edge(xf, hf, status, q, qmax, slip, qtol, stol, ctx, fine, side)
+        edge, reach = self._edge(xf, hf, status, q, qmax, slip, qtol, stol, ctx, fine, side, interior)
         inner = (m1.first + hi) * h if side < 0 else (m1.first + lo) * h
-        if edge is None or side * (inner - edge) > -BUFFER * h:  # (within BUFFER cells of the inner end: the cut's)
+        outer = (m1.first + lo) * h if side < 0 else (m1.first + hi) * h
+        # (within BUFFER cells of the inner end, or of an interior window's outer end: the cut's)
+        if edge is None or side * (inner - edge) > -BUFFER * h or (interior and side * (edge - outer) > -BUFFER * h):
             return window, None, None
+        if interior:  # (a check of the lattice's edge: its own placement; GeneralSolver._finish adds the distance)
+            return window, edge, self._placement(reach, hf, fine, placed)
         return window, edge, self._own_error(edge, reach, hf, fine, lattice_edge, placed, h)
 
     # -- the parts ------------------------------------------------------------------------------------------
@@ -405,18 +454,19 @@ class EdgeWindows:
         out[arrived] = inc
         return out
 
-    def _edge(self, xf, hf, status, q, qmax, slip, qtol, stol, ctx, fine, side):
+    def _edge(self, xf, hf, status, q, qmax, slip, qtol, stol, ctx, fine, side, interior):
         """The window's outermost stick point on its side and how far from it, in fine cells, its placement on
         the fine cells may leave it (_run_edges' placement, and _undecided_reach's for cells its active set left
         undecided at its tolerances ``qtol`` and ``stol``; ``slip`` the fine cells' slip in the take): (None, 0)
-        where no cell sticks. (S1) as the lattice's take found it (``fine.slipping``, ``fine.drives``)."""
+        where no cell sticks. (S1) as the lattice's take found it (``fine.slipping``, ``fine.drives``); an
+        ``interior`` window has no contact edge (its outer end is a cut: an edge there is rejected, _window)."""
         G, N1 = self.G, ctx.N1
         # the stick run nearest the contact edge (the window's inner end is no contact edge: _padded)
         found, i, k, xs, qs, caps, st, ss = _padded(side, xf, hf, q, status, qmax, slip)
         if not found:
             return None, 0.0
         slipping, drives = fine.slipping, fine.drives
-        one_side = (slipping[0], False) if side < 0 else (False, slipping[1])
+        one_side = (False, False) if interior else (slipping[0], False) if side < 0 else (False, slipping[1])
         at = (side + 1) // 2
         left, right, placement = G._run_edges(xs, qs, caps, st, N1, hf, i, k, one_side, drives, at)
         edge = left if side < 0 else right
@@ -448,12 +498,19 @@ class EdgeWindows:
         bound) the band is the state's, and the window's cells in it are as near their bounds: its edge is
         placed to half a fine cell at best, whatever its own rule says (on the punch's random histories two
         window edges placed to the floor there were 0.2 and 0.4 of a fine cell off)."""
-        G = self.G
         apart = max(abs(edge - lattice_edge) - placed * h, 0.0)
+        return max(apart, self._placement(reach, hf, fine, placed))
+
+    def _placement(self, reach, hf, fine, placed):
+        """How far a window's edge may be from where its fine cells put it [m] (:meth:`_own_error` but for the
+        distance from the lattice's edge): its placement (``reach`` fine cells of ``hf``), at least the floor
+        EDGE_PLACEMENT of a fine cell in a partial slip, half a fine cell where the lattice brackets its edge
+        (``placed`` >= 0.5)."""
+        G = self.G
         floor = G.EDGE_PLACEMENT * hf if fine.regime == G.Regime.PARTIAL_SLIP else 0.0
         if placed >= 0.5:
             floor = max(floor, 0.5 * hf)
-        return max(apart, reach * hf, floor)
+        return max(reach * hf, floor)
 
 
 class _Old:
@@ -578,6 +635,49 @@ def _drive_and_locks(tabs, span, R, tf, j0, xf, first1, q1, lo, hi, shift1, bulk
         for i in range(nf):
             lock[i] += arrivals[i]
     return gout, lock
+
+
+@numba.njit(cache=True)
+def _smooth_locks(lock, j0, R, first0, n0, wfirst, wstart):  # pragma: no cover - compiled
+    """The locks of the fine cells j0 .. j0 + lock.size - 1 that lay on the lattice's own cells at the take's start
+    (its interior cells first0 + 1 .. first0 + n0 - 2, none of its windows' fine cells ``wfirst``/``wstart``) as
+    the cubic through the locks at the nearest four lattice centres on the window (each the mean of the two fine
+    centres beside it, R even, or the fine centre on it): a lattice cell's constant shear moves the points
+    within it by a wiggle the smooth shear it stands for does not (the lattice holds its cells at their centres
+    only), and a window's stuck fine cells locked to it reproduce it as an oscillation of their shear."""
+    nf = lock.size
+    # the lattice cells wholly on the window, interior to the state's cells: their centre values
+    a = max((j0 + R - 1) // R, first0 + 1)
+    b = min((j0 + nf) // R - 1, first0 + n0 - 2)
+    out = lock.copy()
+    if b - a + 1 < 4:
+        return out
+    centre = np.empty(b - a + 1)
+    for J in range(a, b + 1):
+        i = R * J + R // 2 - j0
+        centre[J - a] = 0.5 * (lock[i - 1] + lock[i]) if R % 2 == 0 else lock[i]
+    for i in range(nf):
+        j = j0 + i
+        J = j // R
+        if J < first0 + 1 or J > first0 + n0 - 2:
+            continue
+        fine = False
+        for w in range(wfirst.size):
+            if wfirst[w] <= j < wfirst[w] + wstart[w + 1] - wstart[w]:
+                fine = True
+        if fine:
+            continue
+        u = (j + 0.5) / R - 0.5  # in lattice cells, centre J at u = J
+        s = min(max(int(math.floor(u)) - 1, a), b - 3)
+        total = 0.0
+        for m in range(4):
+            weight = 1.0
+            for k in range(4):
+                if k != m:
+                    weight *= (u - (s + k)) / (m - k)
+            total += weight * centre[s + m - a]
+        out[i] = total
+    return out
 
 
 @numba.njit(cache=True)

@@ -684,7 +684,9 @@ class GeneralSolver(TangentialSolver):
                 error = max(error if math.isfinite(error) else 0.0, reach / W)
         windows, edges, regime = (), fine.stick, fine.regime
         if self.windows is not None and fine.regime in (Regime.PARTIAL_SLIP, Regime.STICK):
-            windows, edges, own = self.windows.solve(state, loads1, ctx, fine)
+            # (the checks serve the estimate against the shadow: where it waits, there is none)
+            windows, edges, own, checks = self.windows.solve(state, loads1, ctx, fine,
+                                                             check=self.estimate and rough is not None)
             regime = _windowed_regime(fine, windows, edges, N1)
             if self.estimate and None not in own and fine.widest == fine.stick:
                 # both outermost stick points are the windows' and the lattice's widest stick interval is the one
@@ -692,6 +694,15 @@ class GeneralSolver(TangentialSolver):
                 # EdgeWindows._own_error) and (S1)'s doubts, and so is the spread over sub-steps (step), in place
                 # of the lattices' (their cells' placement is what the windows refine)
                 error = spread = max(max(own), unresolved) / W
+            elif (self.estimate and rough is not None and fine.widest == fine.stick
+                  and all(o is not None or c is not None for o, c in zip(own, checks))):
+                # each outermost stick point is a window's or the lattice's checked by a window around it
+                # (EdgeWindows._check): there, its distance from the check's edge and the check's own placement
+                # together in place of the lattice's placement floor, at least the two lattices' distance on that
+                # side (the check inherits the lattice's history, which that distance measures)
+                sides = [o if o is not None else max(abs(c[0] - e) + c[1], _apart(e, r))
+                         for o, c, e, r in zip(own, checks, fine.stick, rough.stick)]
+                error = spread = max(max(sides), unresolved) / W
             else:
                 # a window's edge far from the lattice's must not look right: the estimate covers their distance
                 apart = max((abs(u - v) for u, v in zip(edges, fine.stick) if math.isfinite(u - v)),
