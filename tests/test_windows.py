@@ -637,6 +637,29 @@ def test_check_windows_leave_the_state_alone_and_measure_the_lattices_edge(kind,
     assert solver.windows.checked == 0 and lowered >= CHECKED_STEPS[(kind, nodes)]
 
 
+def test_a_split_stick_zone_takes_the_windows_estimate():
+    """tests/test_general.py's split history (the rounded punch, step 61: stick intervals [0.010, 0.285] and
+    [0.499, 1] of the contact) at 1024 nodes with windows: both outermost stick points are the windows' (the
+    left 0.0098 of the width in, the right the contact edge), so since 0.4.11 the estimate is theirs although
+    the zone is split (the lattice's floor, EDGE_PLACEMENT of a cell, before): below that floor, and the
+    outermost stick points within it of the lattice's at 8192 nodes (measured 3.1e-6 of the width against an
+    estimate of 1.6e-5; the lattice alone at 1024 nodes 4.9e-6, its floor 9.9e-5)."""
+    from test_general import SPLIT_HISTORY
+
+    from halfslip.geometry import NormalProblem, RoundedPunch
+
+    data = np.loadtxt(SPLIT_HISTORY, delimiter=",")
+    problem = NormalProblem(RoundedPunch(flat_half_width=2e-3, radius=10e-3), 4 * (1 - 0.3**2) / 115e9)
+    width = max(problem.solve(P, M).right - problem.solve(P, M).left for P, M in data[1:, [1, 3]])
+    windowed = GeneralSolver(problem, 0.6, 1024, width=width, edge_windows=True)
+    state, report = march(windowed, data[1:, 1:])[-1]
+    fine = march(GeneralSolver(problem, 0.6, 8192, width=width), data[1:, 1:])[-1][0]
+    W = state.contact_right - state.contact_left
+    assert windowed.stick_intervals(state) == 2
+    assert report.error_estimate < general.EDGE_PLACEMENT * state.memory.spacing / W
+    assert apart(fine, state) <= report.error_estimate
+
+
 def check_of(kind, nodes, path):
     """The checks (EdgeWindows.solve's fourth value) and the lattice's take of the last step of ``path``."""
     solver = solver_of(kind, nodes)

@@ -688,18 +688,19 @@ class GeneralSolver(TangentialSolver):
             windows, edges, own, checks = self.windows.solve(state, loads1, ctx, fine,
                                                              check=self.estimate and rough is not None)
             regime = _windowed_regime(fine, windows, edges, N1)
-            if self.estimate and None not in own and fine.widest == fine.stick:
-                # both outermost stick points are the windows' and the lattice's widest stick interval is the one
-                # they bound: the estimate is theirs (each at least its distance from the lattice's edge,
-                # EdgeWindows._own_error) and (S1)'s doubts, and so is the spread over sub-steps (step), in place
-                # of the lattices' (their cells' placement is what the windows refine)
+            if self.estimate and None not in own:
+                # both outermost stick points are the windows': the estimate is theirs (each at least its
+                # distance from the lattice's edge, EdgeWindows._own_error) and (S1)'s doubts, and so is the spread
+                # over sub-steps (step), in place of the lattices' (their cells' placement is what the windows
+                # refine); also where the stick zone is split inside (until 0.4.11 the lattice's there)
                 error = spread = max(max(own), unresolved) / W
-            elif (self.estimate and rough is not None and fine.widest == fine.stick
+            elif (self.estimate and rough is not None and any(c is not None for c in checks)
                   and all(o is not None or c is not None for o, c in zip(own, checks))):
                 # each outermost stick point is a window's or the lattice's checked by a window around it
                 # (EdgeWindows._check): there, its distance from the check's edge and the check's own placement
                 # together in place of the lattice's placement floor, at least the two lattices' distance on that
-                # side (the check inherits the lattice's history, which that distance measures)
+                # side (the check inherits the lattice's history, which that distance measures); split stick
+                # zones too
                 sides = [o if o is not None else max(abs(c[0] - e) + c[1], _apart(e, r))
                          for o, c, e, r in zip(own, checks, fine.stick, rough.stick)]
                 error = spread = max(max(sides), unresolved) / W
