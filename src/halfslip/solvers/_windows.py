@@ -236,7 +236,7 @@ class EdgeWindows:
         if (fine.regime != self.G.Regime.PARTIAL_SLIP or not math.isfinite(edge)
                 or fine.undecided[(side + 1) // 2] > 0.0):
             return None
-        c = int(math.floor(edge / h)) - m1.first  # the lattice's cell of its edge
+        c = math.floor(edge / h) - m1.first  # the lattice's cell of its edge
         lo = c - WC // 2 + (1 if side > 0 else 0)
         hi = lo + WC
         if not (1 <= lo and hi <= n - 1 and (m1.first + lo) * h >= max(N0.left, N1.left) + h
@@ -289,7 +289,8 @@ class EdgeWindows:
             a.flags.writeable = False
         window = EdgeWindow(side, j0, hf, q, cap, status, G, lo, hi, lattice_edge, spent, placed)
         if not converged:
-            self.failed += not interior
+            if not interior:
+                self.failed += 1
             return window, None, None
         if fine.undecided[(side + 1) // 2] > 0.0:
             # the lattice left cells beside its edge undecided (at their bound, not slipping: a load extreme): the
@@ -668,7 +669,7 @@ def _smooth_locks(lock, j0, R, first0, n0, wfirst, wstart):  # pragma: no cover 
         if fine:
             continue
         u = (j + 0.5) / R - 0.5  # in lattice cells, centre J at u = J
-        s = min(max(int(math.floor(u)) - 1, a), b - 3)
+        s = min(max(math.floor(u) - 1, a), b - 3)
         total = 0.0
         for m in range(4):
             weight = 1.0
