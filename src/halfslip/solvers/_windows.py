@@ -248,7 +248,8 @@ class EdgeWindows:
 
     def _window(self, state, loads1, ctx, fine, side, old, lo, hi, interior=False):
         """The window over the lattice's cells lo .. hi - 1 at the left (side -1) or right contact edge, or, where
-        ``interior``, at the outermost stick point on that side after the take ``fine`` (``old``: the state's
+        ``interior``, a check window around the outermost stick point on that side (:meth:`_check`: both its ends
+        cuts, its locks smoothed, not kept, its error its own placement) after the take ``fine`` (``old``: the state's
         windows on the same fine cells, :class:`_Old`): (its EdgeWindow, its outermost stick point or None, that
         point's own error estimate [m] or None); at a contact edge where all its lattice cells slip and the
         lattice's edge on its side lies beyond its reach (REACH_MARGIN), not solved (:meth:`_slipping`)."""
@@ -302,7 +303,7 @@ class EdgeWindows:
         edge, reach = self._edge(xf, hf, status, q, qmax, slip, qtol, stol, ctx, fine, side, interior)
         inner = (m1.first + hi) * h if side < 0 else (m1.first + lo) * h
         outer = (m1.first + lo) * h if side < 0 else (m1.first + hi) * h
-        # (within BUFFER cells of the inner end, or of an interior window's outer end: the cut's)
+        # (within BUFFER cells of the inner end, or of a check window's outer end: the cut's)
         if edge is None or side * (inner - edge) > -BUFFER * h or (interior and side * (edge - outer) > -BUFFER * h):
             return window, None, None
         if interior:  # (a check of the lattice's edge: its own placement; GeneralSolver._finish adds the distance)
