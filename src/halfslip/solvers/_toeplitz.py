@@ -975,16 +975,20 @@ def compiled_and_cached() -> bool:
 
 @numba.njit(cache=True)
 def flips(q, s, status, qmax, qtol, stol):  # pragma: no cover - compiled
-    """The active set's rule: the stick cells whose shear q is over its bound by more than ``qtol``, and the
-    slipping cells whose increment s opposes their direction by more than ``stol``, as two masks."""
-    over = np.zeros(q.size, np.bool_)
-    back = np.zeros(q.size, np.bool_)
+    """The active set's rule: (the next pattern, whether it is ``status`` unchanged). A stick cell whose shear q
+    is over its bound by more than ``qtol`` slips the way of q; a slipping cell whose increment s opposes its
+    direction by more than ``stol`` sticks."""
+    new = status.copy()
+    same = True
     for i in range(q.size):
         if status[i] == 0:
-            over[i] = abs(q[i]) > qmax[i] + qtol
-        else:
-            back[i] = status[i] * s[i] < -stol
-    return over, back
+            if abs(q[i]) > qmax[i] + qtol:
+                new[i] = 1 if q[i] > 0 else -1
+                same = False
+        elif status[i] * s[i] < -stol:
+            new[i] = 0
+            same = False
+    return new, same
 
 
 #: outcome codes of :func:`active_set`
@@ -1156,16 +1160,7 @@ def active_set(tab, spec, m, idx, C, r, qmax, total, status, qtol, stol,
             sizes[j] = sol[1 + a]
             for i in range(n):
                 s[i] -= sol[1 + a] * phi[j, i]
-        over, back = flips(q, s, status, qmax, qtol, stol)
-        new = status.copy()
-        same = True
-        for i in range(n):
-            if over[i]:
-                new[i] = 1 if q[i] > 0 else -1
-                same = False
-            elif back[i]:
-                new[i] = 0
-                same = False
+        new, same = flips(q, s, status, qmax, qtol, stol)
         if same:
             return q, delta, status, Tq, iterations, cg_total, CONVERGED, sizes, fitted
         repeated = False
@@ -1274,16 +1269,7 @@ def window_active_set(tab, shift, tf, gout, lock, qmax, force, hf, status, qtol,
                 for j in range(n):
                     g -= tf[abs(i - j)] * q[j]
                 s[i] = g
-        over, back = flips(q, s, status, qmax, qtol, stol)  # (the lattice's rule)
-        new = status.copy()
-        same = True
-        for i in range(n):
-            if over[i]:
-                new[i] = 1 if q[i] > 0 else -1
-                same = False
-            elif back[i]:
-                new[i] = 0
-                same = False
+        new, same = flips(q, s, status, qmax, qtol, stol)  # (the lattice's rule)
         if same:
             return q, c, status, True
         for r in range(it):

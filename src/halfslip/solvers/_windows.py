@@ -250,8 +250,8 @@ class EdgeWindows:
         """The window over the lattice's cells lo .. hi - 1 at the left (side -1) or right contact edge, or, where
         ``interior``, a check window around the outermost stick point on that side (:meth:`_check`: both its ends
         cuts, its locks smoothed, not kept, its error its own placement) after the take ``fine`` (``old``: the state's
-        windows on the same fine cells, :class:`_Old`): (its EdgeWindow, its outermost stick point or None, that
-        point's own error estimate [m] or None); at a contact edge where all its lattice cells slip and the
+        windows on the same fine cells, :class:`_Old`): (its EdgeWindow (None for a check), its outermost stick
+        point or None, that point's own error estimate [m] or None); at a contact edge where all its lattice cells slip and the
         lattice's edge on its side lies beyond its reach (REACH_MARGIN), not solved (:meth:`_slipping`)."""
         S, R, WC = self.solver, self.refine, self.cells
         h, N1, m1, mem0 = ctx.h, ctx.N1, fine.memory, state.memory
@@ -284,11 +284,13 @@ class EdgeWindows:
         q, c, status, converged = window_active_set(fine_tab, datum_shift, tf, gout, lock, qmax, force, hf, status,
                                                     qtol, stol, WINDOW_ITERATIONS)
         slip, cut_slips = _window_slip(tf, j0, q, c, status, gout, lock, *cut)
-        spent, G = self._slip(state, fine, side, converged and not cut_slips and not interior, status, slip, cap,
-                              old, j0, xf, lo, hi)
-        for a in (q, cap, status, G):
-            a.flags.writeable = False
-        window = EdgeWindow(side, j0, hf, q, cap, status, G, lo, hi, lattice_edge, spent, placed)
+        window = None  # (a check's is not kept)
+        if not interior:
+            spent, G = self._slip(state, fine, side, converged and not cut_slips, status, slip, cap, old, j0, xf,
+                                  lo, hi)
+            for a in (q, cap, status, G):
+                a.flags.writeable = False
+            window = EdgeWindow(side, j0, hf, q, cap, status, G, lo, hi, lattice_edge, spent, placed)
         if not converged:
             if not interior:
                 self.failed += 1
