@@ -11,7 +11,9 @@ Speed: the solver's step() alone (normal solves included, no output), per
 step, the best of ``--repeat`` passes. With ``--baseline N ...`` the IC
 baseline (benchmarks/baseline_ic.py) runs on the same histories in the same
 process, timed the same way (the best of ``--repeat`` passes), so the ratio
-of times is measured in one run on one machine.
+of times is measured in one run on one machine. Both are timed as simulate marches
+(simulator._heap_frozen: the objects that exist before a pass are out of the
+garbage collector's full passes during it).
 Writes the table between the markers in docs/benchmarks.md.
 """
 from __future__ import annotations
@@ -45,7 +47,7 @@ BEGIN, END = "<!-- general_random: begin -->", "<!-- general_random: end -->"
 def run_solver(geometry, seed, nodes, repeat=1, estimate=True, **options):
     """Step the package's general solver through one history; per-step records and the best wall time
     (``options``: GeneralSolver's, such as travel and stick_travel; its counts of sub-steps and takes)."""
-    from halfslip.simulator import reference_width
+    from halfslip.simulator import _heap_frozen, reference_width
     from halfslip.solvers.general import GeneralSolver as LatticeSolver
     from halfslip.state import Loads
 
@@ -62,23 +64,24 @@ def run_solver(geometry, seed, nodes, repeat=1, estimate=True, **options):
         state = solver.initial_state(t[0])
         rec = {k: [] for k in ("contact_left", "contact_right", "stick_left", "stick_right", "intervals",
                                "dissipation", "converged", "error", "iterations", "main_left", "main_right")}
-        started = time.perf_counter()
-        for i in range(1, t.size):
-            state, rep = solver.step(state, t[i], Loads(P[i], Q[i], M[i], S[i]))
-            rec["contact_left"].append(state.contact_left)
-            rec["contact_right"].append(state.contact_right)
-            rec["stick_left"].append(state.stick_left)
-            rec["stick_right"].append(state.stick_right)
-            rec["intervals"].append(solver.stick_intervals(state))
-            rec["dissipation"].append(state.dissipation)
-            rec["converged"].append(rep.converged)
-            rec["error"].append(rep.error_estimate)
-            rec["iterations"].append(rep.iterations)
-            zones = solver.stick_zones(state)
-            widest = max(zones, key=lambda z: z[1] - z[0]) if zones else (math.nan, math.nan)
-            rec["main_left"].append(widest[0])
-            rec["main_right"].append(widest[1])
-        best = min(best, time.perf_counter() - started)
+        with _heap_frozen():  # (as simulate marches: the imports' objects out of the collector's passes)
+            started = time.perf_counter()
+            for i in range(1, t.size):
+                state, rep = solver.step(state, t[i], Loads(P[i], Q[i], M[i], S[i]))
+                rec["contact_left"].append(state.contact_left)
+                rec["contact_right"].append(state.contact_right)
+                rec["stick_left"].append(state.stick_left)
+                rec["stick_right"].append(state.stick_right)
+                rec["intervals"].append(solver.stick_intervals(state))
+                rec["dissipation"].append(state.dissipation)
+                rec["converged"].append(rep.converged)
+                rec["error"].append(rep.error_estimate)
+                rec["iterations"].append(rep.iterations)
+                zones = solver.stick_zones(state)
+                widest = max(zones, key=lambda z: z[1] - z[0]) if zones else (math.nan, math.nan)
+                rec["main_left"].append(widest[0])
+                rec["main_right"].append(widest[1])
+            best = min(best, time.perf_counter() - started)
     out = {k: np.asarray(v) for k, v in rec.items()}
     out["wall"] = best
     out["steps"] = t.size - 1
@@ -91,14 +94,17 @@ def run_baseline(geometry, seed, n, repeat=1):
     :func:`run_solver`'s: the speed-up is a ratio of times measured the same way)."""
     from baseline_ic import history_extent, run_history
 
+    from halfslip.simulator import _heap_frozen
+
     info = {}
     _, t, P, Q, M, S = random_history(seed, geometry, info=info)
     extent = history_extent(info["problem"], P, M)
     wall = math.inf
     for _ in range(repeat):
-        started = time.perf_counter()
-        out = run_history(info["problem"], info["friction"], n, P, Q, M, S, extent=extent)
-        wall = min(wall, time.perf_counter() - started)
+        with _heap_frozen():  # (as run_solver's passes)
+            started = time.perf_counter()
+            out = run_history(info["problem"], info["friction"], n, P, Q, M, S, extent=extent)
+            wall = min(wall, time.perf_counter() - started)
     rec = {k: np.asarray(out[k]) for k in ("contact_left", "contact_right", "stick_left", "stick_right",
                                            "intervals", "dissipation", "converged", "main_left", "main_right")}
     rec["wall"] = wall
