@@ -8,7 +8,9 @@ the stored fields, as ``halfslip run`` does, without writing the file), and the
 solver's ``step()`` alone is timed over a second run in the same process (the
 marching without start-up, numba's loading of its kernels and output): one
 untimed run first (numba compiles and caches its kernels), then ``--repeat``
-timed runs; the table gives the median and the time per marched step. With
+timed runs; the table gives the median and the time per marched step, and
+the median wall time of the whole command, ``halfslip run SCENE -o OUT.h5``
+through its entry point, in a fresh process after each timed run. With
 ``--against REV`` the same scenes run with the package of that revision (a
 temporary ``git worktree``, in a subprocess), the two alternating run by run,
 so that the ratio is measured in one session on one machine (the machines are
@@ -71,6 +73,21 @@ def _run(src: Path, scene: Path) -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
+#: What the command runs: ``halfslip run`` through its entry point (halfslip_launch), as the installed script does.
+_COMMAND = "import sys; from halfslip_launch import main; sys.argv = ['halfslip', 'run'] + sys.argv[1:]; main()"
+
+
+def _command(src: Path, scene: Path) -> float:
+    """The wall time of the whole ``halfslip run SCENE -o OUT.h5`` in a fresh process (interpreter, import,
+    run, the file written), with the package of ``src``."""
+    env = dict(os.environ, PYTHONPATH=str(src), OPENBLAS_NUM_THREADS="1")
+    with tempfile.TemporaryDirectory() as tmp:
+        began = time.perf_counter()
+        subprocess.run([sys.executable, "-c", _COMMAND, str(scene), "-o", str(Path(tmp) / "out.h5")], env=env,
+                       capture_output=True, text=True, check=True, cwd=str(src.parent))
+        return time.perf_counter() - began
+
+
 def _median(values: list[float]) -> float:
     values = sorted(values)
     mid = len(values) // 2
@@ -86,6 +103,7 @@ def measure(trees: dict[str, Path], repeat: int, examples: list[str]) -> dict:
             _run(src, scene)  # compile and cache the kernels; warm the file cache
         walls: dict[str, list[float]] = {label: [] for label in trees}
         steps: dict[str, list[float]] = {label: [] for label in trees}
+        commands: dict[str, list[float]] = {label: [] for label in trees}
         last: dict[str, dict] = {}
         for _ in range(repeat):
             for label, src in trees.items():
@@ -93,8 +111,10 @@ def measure(trees: dict[str, Path], repeat: int, examples: list[str]) -> dict:
                 walls[label].append(got["wall"])
                 steps[label].append(got["step"])
                 last[label] = got
+                commands[label].append(_command(src, scene))
         out[name] = {label: dict(last[label], wall=_median(walls[label]), walls=walls[label],
-                                 step=_median(steps[label])) for label in trees}
+                                 step=_median(steps[label]), command=_median(commands[label]))
+                     for label in trees}
         line = "; ".join(f"{label} {out[name][label]['wall']:.3f} s" for label in trees)
         print(f"{name}: {line}", flush=True)
     return out
@@ -111,21 +131,24 @@ def _machine() -> str:
 def write_doc(results: dict, trees: dict[str, Path], argv: list[str]) -> None:
     labels = list(trees)
     head = "| example | method | steps | " + " | ".join(
-        f"{label} [s] | {label} [ms / step] | {label}: step() alone [ms / step]" for label in labels)
-    sep = "|---|---|---:|" + "---:|---:|---:|" * len(labels)
+        f"{label} [s] | {label} [ms / step] | {label}: step() alone [ms / step] | {label}: `halfslip run` [s]"
+        for label in labels)
+    sep = "|---|---|---:|" + "---:|---:|---:|---:|" * len(labels)
     if len(labels) == 2:
-        head += f" | speed-up ({labels[0]} / {labels[1]}) | dissipation, relative difference"
-        sep += "---:|---:|"
+        head += (f" | speed-up ({labels[0]} / {labels[1]}) | `halfslip run`, speed-up | dissipation, relative "
+                 "difference")
+        sep += "---:|---:|---:|"
     rows = [head + " |", sep]
     for name, by in results.items():
         first = by[labels[0]]
         cells = [name, first["method"], str(first["steps"])]
         for label in labels:
             cells += [f"{by[label]['wall']:.3f}", f"{1e3 * by[label]['wall'] / by[label]['steps']:.2f}",
-                      f"{1e3 * by[label]['step']:.2f}"]
+                      f"{1e3 * by[label]['step']:.2f}", f"{by[label]['command']:.2f}"]
         if len(labels) == 2:
             a, b = by[labels[0]], by[labels[1]]
             cells.append(f"{a['wall'] / b['wall']:.2f}x")
+            cells.append(f"{a['command'] / b['command']:.2f}x")
             rel = abs(a["dissipation"] - b["dissipation"]) / max(abs(b["dissipation"]), 1e-300)
             cells.append(f"{rel:.1e}")
         rows.append("| " + " | ".join(cells) + " |")
@@ -135,7 +158,9 @@ def write_doc(results: dict, trees: dict[str, Path], argv: list[str]) -> None:
         f"({time.strftime('%Y-%m-%d')}; {_machine()}; median of the timed runs, each a whole "
         "`halfslip.simulate` with start-up and stored fields in a fresh process"
         + (", the trees alternating run by run" if len(labels) == 2 else "")
-        + "; step() alone: the solver's steps of a second run in the same process, per marched step)",
+        + "; step() alone: the solver's steps of a second run in the same process, per marched step; "
+        "`halfslip run`: the whole command in a fresh process, interpreter and import to the file written, "
+        "the median of as many runs)",
         "",
         *rows,
         END,
