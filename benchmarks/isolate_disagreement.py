@@ -1,0 +1,101 @@
+"""Where the lattice and the IC reference disagree, with one load taken out (docs/general_solver.md, the
+Hertz history's steps 72-76).
+
+    python benchmarks/isolate_disagreement.py random --drop sigma      # seed 0 Hertz, steps 1..80, sigma = 0
+    python benchmarks/isolate_disagreement.py random --drop M
+    python benchmarks/isolate_disagreement.py short                     # a 22-step Hertz history, sigma alone
+
+Runs the package's general solver (no windows, no estimate) at ``--nodes`` and the IC baseline at ``--ic``
+(each step in four sub-steps, as the reference) on the same history, and prints per step the outermost
+stick points' distance from the finest IC run, in contact widths: the lattices', then the coarser IC runs'
+(their spread says how far the finest may be from its own limit). The IC at N = 16000 takes 10-30 minutes.
+"""
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+from baseline_ic import history_extent, run_history  # noqa: E402
+from random_histories import random_history  # noqa: E402
+
+KEYS = ("stick_left", "stick_right", "contact_left", "contact_right")
+
+
+def history(kind: str, drop: str | None):
+    """(problem, friction, reference width, P, Q, M, sigma) with point 0 the start."""
+    if kind == "random":
+        info = {}
+        scene, _, P, Q, M, S = random_history(0, "hertz", info=info)
+        P, Q, M, S = (v[:81].copy() for v in (P, Q, M, S))
+        if drop == "sigma":
+            S[:] = 0.0
+        elif drop == "M":
+            M[:] = 0.0
+        from halfslip.simulator import reference_width
+        return info["problem"], info["friction"], reference_width(scene, info["problem"]), P, Q, M, S
+    from halfslip.geometry import Hertz, NormalProblem
+    f, P0, A = 0.6, 1e5, 4 * (1 - 0.3**2) / 200e9  # (tests/helpers.py's steel pad)
+    problem = NormalProblem(Hertz(radius=50e-3), A)
+    a = float(problem.half_width(P0))
+    s = f * 2 * P0 / (np.pi * a)  # f p0
+    pts = [(0.0, 0.0, 0.0, 0.0)] + [(P0 * k / 4, 0.0, 0.0, 0.0) for k in range(1, 5)]
+    pts += [(P0, 0.5 * f * P0 * k / 6, 0.0, 0.3 * s * k / 6) for k in range(1, 7)]
+    pts += [(P0 * (1 + 0.3 * k / 12), 0.5 * f * P0 * (1 - 1.6 * k / 12), 0.0, 0.3 * s * (1 - 0.5 * k / 12))
+            for k in range(1, 13)]
+    P, Q, M, S = (np.array(v, dtype=float) for v in zip(*pts))
+    if drop == "sigma":
+        S[:] = 0.0
+    return problem, f, 2 * float(problem.half_width(1.3 * P0)), P, Q, M, S
+
+
+def lattice(problem, f, width, nodes, P, Q, M, S):
+    from halfslip.solvers.general import GeneralSolver
+    from halfslip.state import Loads
+    solver = GeneralSolver(problem, f, nodes, width=width, estimate=False, edge_windows=False)
+    state = solver.initial_state(0.0)
+    out = {k: [] for k in KEYS}
+    for i in range(1, P.size):
+        state, _ = solver.step(state, float(i), Loads(P[i], Q[i], M[i], S[i]))
+        for k in KEYS:
+            out[k].append(getattr(state, k))
+    return {k: np.asarray(v) for k, v in out.items()}
+
+
+def ic(problem, f, n, P, Q, M, S):
+    out = run_history(problem, f, n, P, Q, M, S, extent=history_extent(problem, P, M), time_split=4)
+    return {k: np.asarray(out[k]) for k in KEYS}
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("kind", choices=["random", "short"])
+    ap.add_argument("--drop", choices=["sigma", "M"])
+    ap.add_argument("--nodes", type=int, nargs="+", default=[1024, 2048])
+    ap.add_argument("--ic", type=int, nargs="+", default=[4000, 8000, 16000])
+    ap.add_argument("--from-step", type=int, default=1)
+    args = ap.parse_args(argv)
+    problem, f, width, P, Q, M, S = history(args.kind, args.drop)
+    runs = {f"L{n}": lattice(problem, f, width, n, P, Q, M, S) for n in args.nodes}
+    ics = {f"IC{n}": ic(problem, f, n, P, Q, M, S) for n in sorted(args.ic)}
+    finest = ics.pop(f"IC{max(args.ic)}")
+    runs.update(ics)
+    W = finest["contact_right"] - finest["contact_left"]
+    print("step  " + "  ".join(f"{side}: " + " ".join(f"{k:>8}" for k in runs) for side in ("left", "right")))
+    for i in range(args.from_step - 1, W.size):
+        cells = ["  ".join(" ".join(f"{(r[key][i] - finest[key][i]) / W[i]:+8.1e}" for r in runs.values())
+                           for key in ("stick_left", "stick_right"))]
+        print(f"{i + 1:4d}  " + cells[0])
+
+
+if __name__ == "__main__":
+    main()
