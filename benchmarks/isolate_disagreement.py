@@ -4,6 +4,7 @@ Hertz history's steps 72-76).
     python benchmarks/isolate_disagreement.py random --drop sigma      # seed 0 Hertz, steps 1..80, sigma = 0
     python benchmarks/isolate_disagreement.py random --drop M
     python benchmarks/isolate_disagreement.py short                     # a 22-step Hertz history, sigma alone
+    python benchmarks/isolate_disagreement.py short --moment 0.3        # the same with M = 0.3 a P in phase with sigma
 
 Runs the package's general solver (no windows, no estimate) at ``--nodes`` and the IC baseline at ``--ic``
 (each step in four sub-steps, as the reference) on the same history, and prints per step the outermost
@@ -31,7 +32,7 @@ from random_histories import random_history  # noqa: E402
 KEYS = ("stick_left", "stick_right", "contact_left", "contact_right")
 
 
-def history(kind: str, drop: str | None):
+def history(kind: str, drop: str | None, moment: float = 0.0):
     """(problem, friction, reference width, P, Q, M, sigma) with point 0 the start."""
     if kind == "random":
         info = {}
@@ -49,9 +50,10 @@ def history(kind: str, drop: str | None):
     a = float(problem.half_width(P0))
     s = f * 2 * P0 / (np.pi * a)  # f p0
     pts = [(0.0, 0.0, 0.0, 0.0)] + [(P0 * k / 4, 0.0, 0.0, 0.0) for k in range(1, 5)]
-    pts += [(P0, 0.5 * f * P0 * k / 6, 0.0, 0.3 * s * k / 6) for k in range(1, 7)]
-    pts += [(P0 * (1 + 0.3 * k / 12), 0.5 * f * P0 * (1 - 1.6 * k / 12), 0.0, 0.3 * s * (1 - 0.5 * k / 12))
-            for k in range(1, 13)]
+    # M (moment * a P) follows sigma: up with Q, down as Q reverses
+    pts += [(P0, 0.5 * f * P0 * k / 6, moment * a * P0 * k / 6, 0.3 * s * k / 6) for k in range(1, 7)]
+    pts += [(P0 * (1 + 0.3 * k / 12), 0.5 * f * P0 * (1 - 1.6 * k / 12), moment * a * P0 * (1 - 0.5 * k / 12),
+             0.3 * s * (1 - 0.5 * k / 12)) for k in range(1, 13)]
     P, Q, M, S = (np.array(v, dtype=float) for v in zip(*pts))
     if drop == "sigma":
         S[:] = 0.0
@@ -82,9 +84,10 @@ def main(argv=None) -> None:
     ap.add_argument("--drop", choices=["sigma", "M"])
     ap.add_argument("--nodes", type=int, nargs="+", default=[1024, 2048])
     ap.add_argument("--ic", type=int, nargs="+", default=[4000, 8000, 16000])
+    ap.add_argument("--moment", type=float, default=0.0, help="short: M as a fraction of a P (0: none)")
     ap.add_argument("--from-step", type=int, default=1)
     args = ap.parse_args(argv)
-    problem, f, width, P, Q, M, S = history(args.kind, args.drop)
+    problem, f, width, P, Q, M, S = history(args.kind, args.drop, args.moment)
     runs = {f"L{n}": lattice(problem, f, width, n, P, Q, M, S) for n in args.nodes}
     ics = {f"IC{n}": ic(problem, f, n, P, Q, M, S) for n in sorted(args.ic)}
     finest = ics.pop(f"IC{max(args.ic)}")
