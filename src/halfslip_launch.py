@@ -79,8 +79,8 @@ def _freeze_imports() -> None:
     disabled during the import, which would otherwise have walked the growing heap three times over (the
     import leaves under a thousand unreachable objects, which stay). Measured on `halfslip run
     examples/dovetail.yaml`: 4 full passes of 25-93 ms, 210 ms in all (during the imports of scipy, xarray and
-    numba, and one at exit) before, one of 15 ms after; the whole command 3.37 -> 2.87 s, the motor loop's
-    2.05 -> 1.69 s (medians of five, alternating; docs/benchmarks.md). The command's own objects are
+    numba, and one at exit) before, one of 15 ms after; the whole command 2.98 -> 2.58 s, the motor loop's
+    1.69 -> 1.43 s (docs/benchmarks.md, bench_examples.py against 0.4.11). The command's own objects are
     collected as usual."""
     gc.freeze()
     gc.enable()

@@ -1,6 +1,9 @@
 """End to end: scene -> simulate -> HDF5 -> xarray / h5py, and the run command."""
 from __future__ import annotations
 
+import gc
+import subprocess
+import sys
 from pathlib import Path
 
 import h5py
@@ -133,8 +136,6 @@ def test_general_run_says_when_its_slip_zones_are_under_resolved():
 def _oldest_during(scene) -> tuple[list, int]:
     """simulate(scene) with, after every step, the number of objects in the collector's oldest generation
     (what a full pass walks; frozen objects are not in it), and the freeze count after the run."""
-    import gc
-
     walked = []
     hs.simulate(scene, progress=lambda i, n: walked.append(len(gc.get_objects(generation=2))))
     return walked, gc.get_freeze_count()
@@ -143,10 +144,8 @@ def _oldest_during(scene) -> tuple[list, int]:
 def test_simulate_keeps_the_older_objects_out_of_the_collectors_passes_and_gives_them_back():
     """While a run marches, what existed before it is frozen (simulator._heap_frozen): a full pass would walk
     only what the run made (fewer than a tenth of the objects there were before: measured none at any of
-    the motor loop's 276 steps against about 107,000 before, and all of them without the freeze), and after the run it is unfrozen as it was (a library
-    call must not change the collector's state for its caller)."""
-    import gc
-
+    the motor loop's 276 steps against about 107,000 before, and all of them without the freeze), and after
+    the run it is unfrozen as it was (a library call must not change the collector's state for its caller)."""
     scene = hs.load_scene(EXAMPLES / "motor.yaml")
     hs.simulate(scene)  # (the first run's compiled code loaded)
     gc.collect()
@@ -161,8 +160,6 @@ def test_simulate_keeps_the_older_objects_out_of_the_collectors_passes_and_gives
 def test_simulate_leaves_a_freeze_it_did_not_make():
     """The ``halfslip`` command freezes its imports (halfslip_launch._freeze_imports); simulate then does not
     unfreeze them when it ends."""
-    import gc
-
     gc.freeze()
     try:
         count = gc.get_freeze_count()
@@ -176,11 +173,9 @@ def test_the_command_freezes_its_imports_and_collects_its_own_objects():
     """halfslip_launch.main: after the import the command's objects are frozen (the module is imported first
     here, so that the program can be replaced by a probe) and the collector is on for the command itself
     (its own garbage is collected)."""
-    import subprocess
-    import sys
-
     code = ("import gc, halfslip.cli, halfslip_launch\n"
-            "halfslip.cli.run_as_program = lambda: print(gc.isenabled(), gc.get_freeze_count() > len(gc.get_objects()))\n"
+            "probe = lambda: print(gc.isenabled(), gc.get_freeze_count() > len(gc.get_objects()))\n"
+            "halfslip.cli.run_as_program = probe\n"
             "halfslip_launch.main()\n")
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=False)
     assert done.stdout.split() == ["True", "True"], done.stderr
