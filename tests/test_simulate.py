@@ -4,6 +4,7 @@ from __future__ import annotations
 import gc
 import subprocess
 import sys
+import threading
 from pathlib import Path
 
 import h5py
@@ -179,3 +180,32 @@ def test_the_command_freezes_its_imports_and_collects_its_own_objects():
             "halfslip_launch.main()\n")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=False)
     assert done.stdout.split() == ["True", "True"], done.stderr
+
+
+def test_overlapping_marches_give_the_heap_back_once_the_last_one_ends():
+    """simulate in several threads at once (a dask worker runs its tasks so): the marches overlap in any
+    order, and the heap stays frozen until the last one ends, then is given back (a freeze undone by whichever
+    march had found the heap unfrozen, as before the lock, gave it back while another still marched; and a
+    check-then-freeze that interleaved with an unfreeze could leave it frozen for good)."""
+    from halfslip.simulator import _heap_frozen
+
+    assert gc.get_freeze_count() == 0
+    for order in ("first in, first out", "first in, last out"):
+        one, two = _heap_frozen(), _heap_frozen()
+        one.__enter__()
+        two.__enter__()
+        first, second = (one, two) if order == "first in, first out" else (two, one)
+        first.__exit__(None, None, None)
+        assert gc.get_freeze_count() > 0, order  # the other still marches
+        second.__exit__(None, None, None)
+        assert gc.get_freeze_count() == 0, order
+    # and real runs in threads
+    scene = hs.load_scene(EXAMPLES / "motor.yaml")
+    done = []
+    threads = [threading.Thread(target=lambda: done.append(hs.simulate(scene).attrs["complete"])) for _ in range(3)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert done == [1, 1, 1]
+    assert gc.get_freeze_count() == 0

@@ -10,6 +10,7 @@ import contextlib
 import dataclasses
 import gc
 import math
+import threading
 import time
 from dataclasses import dataclass, field
 from typing import Callable
@@ -403,6 +404,13 @@ def simulate(
     return ds
 
 
+_FROZEN_LOCK = threading.Lock()
+_frozen = {"marches": 0, "ours": False}
+"""The marches inside :func:`_heap_frozen` (several at once where simulate runs in threads, as on a dask
+worker), and whether the freeze is theirs to undo: the count is changed under the lock, so that the last one
+out unfreezes exactly when the first one in froze an unfrozen heap."""
+
+
 @contextlib.contextmanager
 def _heap_frozen():
     """The objects that exist before the march are left out of the garbage collector's passes while it runs
@@ -412,14 +420,19 @@ def _heap_frozen():
     out, had one full pass of 73 ms during the march without it and none with it. Objects made during the
     march are collected as usual; a cycle among the older ones that becomes garbage meanwhile waits to the
     end of the run. Where objects are frozen already (the ``halfslip`` command froze its imports) the freeze
-    is theirs to undo: it is kept."""
-    ours = gc.get_freeze_count() == 0
-    gc.freeze()
+    is theirs to undo: it is kept; where marches overlap (threads) the last one out undoes it."""
+    with _FROZEN_LOCK:
+        if _frozen["marches"] == 0:
+            _frozen["ours"] = gc.get_freeze_count() == 0
+        _frozen["marches"] += 1
+        gc.freeze()
     try:
         yield
     finally:
-        if ours:
-            gc.unfreeze()
+        with _FROZEN_LOCK:
+            _frozen["marches"] -= 1
+            if _frozen["marches"] == 0 and _frozen["ours"]:
+                gc.unfreeze()
 
 
 def _first_step_after_resume(run: _Run) -> None:
