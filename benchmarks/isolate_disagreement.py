@@ -5,6 +5,8 @@ Hertz history's steps 72-76).
     python benchmarks/isolate_disagreement.py random --drop M
     python benchmarks/isolate_disagreement.py short                     # a 22-step Hertz history, sigma alone
     python benchmarks/isolate_disagreement.py short --moment 0.3        # the same with M = 0.3 a P in phase with sigma
+    python benchmarks/isolate_disagreement.py random --force --ic 8000 16000 --nodes 2048 4096
+                                                 # the cumulative force int q apart, per step, and where
 
 Runs the package's general solver (no windows, no estimate) at ``--nodes`` and the IC baseline at ``--ic``
 (each step in four sub-steps, as the reference) on the same history, and prints per step the outermost
@@ -60,22 +62,39 @@ def history(kind: str, drop: str | None, moment: float = 0.0):
     return problem, f, 2 * float(problem.half_width(1.3 * P0)), P, Q, M, S
 
 
+def cumulative(x, q, h):
+    """The cumulative force int q from the left at the cells' boundaries (x their centres, h their width)."""
+    return np.concatenate((x - 0.5 * h, [x[-1] + 0.5 * h])), np.concatenate(([0.0], np.cumsum(q * h)))
+
+
 def lattice(problem, f, width, nodes, P, Q, M, S):
     from halfslip.solvers.general import GeneralSolver
     from halfslip.state import Loads
     solver = GeneralSolver(problem, f, nodes, width=width, estimate=False, edge_windows=False)
     state = solver.initial_state(0.0)
     out = {k: [] for k in KEYS}
+    forces = []
     for i in range(1, P.size):
         state, _ = solver.step(state, float(i), Loads(P[i], Q[i], M[i], S[i]))
         for k in KEYS:
             out[k].append(getattr(state, k))
-    return {k: np.asarray(v) for k, v in out.items()}
+        m = state.memory
+        forces.append(cumulative(np.asarray(m.x), np.asarray(m.q), m.spacing))
+    out = {k: np.asarray(v) for k, v in out.items()}
+    out["force"] = forces
+    return out
 
 
-def ic(problem, f, n, P, Q, M, S):
-    out = run_history(problem, f, n, P, Q, M, S, extent=history_extent(problem, P, M), time_split=4)
-    return {k: np.asarray(out[k]) for k in KEYS}
+def ic(problem, f, n, P, Q, M, S, keep_q=False):
+    """The IC run, each step in four sub-steps (the reference's); with ``keep_q`` in one (its q is kept per
+    history step only then)."""
+    out = run_history(problem, f, n, P, Q, M, S, extent=history_extent(problem, P, M), time_split=1 if keep_q else 4,
+                      keep_q=keep_q)
+    got = {k: np.asarray(out[k]) for k in KEYS}
+    if keep_q:
+        x = np.asarray(out["x"])
+        got["force"] = [cumulative(x, q, x[1] - x[0]) for q in out["q"]]
+    return got
 
 
 def main(argv=None) -> None:
@@ -86,13 +105,27 @@ def main(argv=None) -> None:
     ap.add_argument("--ic", type=int, nargs="+", default=[4000, 8000, 16000])
     ap.add_argument("--moment", type=float, default=0.0, help="short: M as a fraction of a P (0: none)")
     ap.add_argument("--from-step", type=int, default=1)
+    ap.add_argument("--force", action="store_true",
+                    help="print the cumulative force int q apart (largest, over f P, and where) instead of the edges")
     args = ap.parse_args(argv)
     problem, f, width, P, Q, M, S = history(args.kind, args.drop, args.moment)
     runs = {f"L{n}": lattice(problem, f, width, n, P, Q, M, S) for n in args.nodes}
-    ics = {f"IC{n}": ic(problem, f, n, P, Q, M, S) for n in sorted(args.ic)}
+    ics = {f"IC{n}": ic(problem, f, n, P, Q, M, S, keep_q=args.force) for n in sorted(args.ic)}
     finest = ics.pop(f"IC{max(args.ic)}")
     runs.update(ics)
     W = finest["contact_right"] - finest["contact_left"]
+    if args.force:
+        print("step  " + "  ".join(f"{k}: |dF| / f P at x [m]" for k in runs))
+        for i in range(args.from_step - 1, W.size):
+            grid = np.linspace(finest["contact_left"][i], finest["contact_right"][i], 4001)
+            ref = np.interp(grid, *finest["force"][i])
+            cells = []
+            for r in runs.values():
+                d = np.interp(grid, *r["force"][i]) - ref
+                k = int(np.argmax(np.abs(d)))
+                cells.append(f"{abs(d[k]) / (f * P[i + 1]):.1e} at {grid[k]:+.3e}")
+            print(f"{i + 1:4d}  " + "  ".join(cells))
+        return
     print("step  " + "  ".join(f"{side}: " + " ".join(f"{k:>8}" for k in runs) for side in ("left", "right")))
     for i in range(args.from_step - 1, W.size):
         cells = ["  ".join(" ".join(f"{(r[key][i] - finest[key][i]) / W[i]:+8.1e}" for r in runs.values())
