@@ -20,7 +20,6 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import argparse
-import math
 import sys
 from pathlib import Path
 
@@ -28,63 +27,28 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
+sys.path.insert(0, str(HERE.parent / "tests"))
 
+import helpers  # noqa: E402
 from baseline_ic import history_extent, run_history  # noqa: E402
-from random_histories import random_history  # noqa: E402
-
-GAUSS = np.polynomial.legendre.leggauss(40)
+from isolate_disagreement import history  # noqa: E402
 
 
 class StuckHistory:
-    """The history's loads and normal problem, and the exact fully stuck q at any point after step K."""
+    """The history's loads and normal problem (isolate_disagreement.history), and the exact fully stuck q at any
+    point after step K (tests/helpers.stuck_shear)."""
 
     def __init__(self, drop: str | None):
-        info = {}
-        self.scene, _, P, Q, M, S = random_history(0, "hertz", info=info)
-        self.problem, self.friction = info["problem"], info["friction"]
-        if drop == "sigma":
-            S = S * 0.0
-        elif drop == "M":
-            M = M * 0.0
-        self.P, self.Q, self.M, self.S = P, Q, M, S
+        self.problem, self.friction, self.width, self.P, self.Q, self.M, self.S = history("random", drop)
 
-    def edges(self, k: int, lam: float) -> tuple[float, float]:
-        P = self.P[k - 1] + lam * (self.P[k] - self.P[k - 1])
-        if P <= 0.0:
-            return math.nan, math.nan
-        sol = self.problem.solve(P, self.M[k - 1] + lam * (self.M[k] - self.M[k - 1]))
+    def edges(self, K: int) -> tuple[float, float]:
+        """The contact edges at the end of step K."""
+        sol = self.problem.solve(self.P[K], self.M[K])
         return sol.left, sol.right
 
-    def arrival(self, k: int, x: float) -> float | None:
-        """The fraction of step k at which x enters the contact (0: in contact at its start; None: not by its end)."""
-        left, right = self.edges(k, 0.0)
-        if left < x < right:
-            return 0.0
-        left, right = self.edges(k, 1.0)
-        if not left < x < right:
-            return None
-        lo, hi = 0.0, 1.0
-        for _ in range(50):
-            mid = 0.5 * (lo + hi)
-            left, right = self.edges(k, mid)
-            lo, hi = (lo, mid) if left < x < right else (mid, hi)
-        return hi
-
     def q(self, x: float, K: int) -> float:
-        total = 0.0
-        u, w = 0.5 * (GAUSS[0] + 1.0), 0.5 * GAUSS[1]
-        for k in range(1, K + 1):
-            la = self.arrival(k, x)
-            if la is None:  # (not in contact yet: these steps' contacts only grow)
-                continue
-            dQ, dS = self.Q[k] - self.Q[k - 1], self.S[k] - self.S[k - 1]
-            for ui, wi in zip(u, w):
-                lam = la + (1.0 - la) * ui * ui
-                left, right = self.edges(k, lam)
-                c, d = 0.5 * (left + right), 0.5 * (right - left)
-                root = math.sqrt(max(d * d - (x - c) ** 2, 1e-300))
-                total += wi * 2.0 * (1.0 - la) * ui * (dQ / (math.pi * root) + dS * (x - c) / (4.0 * root))
-        return total
+        return helpers.stuck_shear(self.problem, list(zip(self.P[1:K + 1], self.Q[1:K + 1], self.M[1:K + 1],
+                                                          self.S[1:K + 1])), x)
 
     def loads(self, K: int, split: int):
         """(P, Q, M, sigma) from the start to step K, each step cut into ``split`` equal steps."""
@@ -97,11 +61,9 @@ class StuckHistory:
 
 
 def lattice_q(h: StuckHistory, nodes: int, K: int, split: int):
-    from halfslip.simulator import reference_width
     from halfslip.solvers.general import GeneralSolver
     from halfslip.state import Loads
-    solver = GeneralSolver(h.problem, h.friction, nodes, width=reference_width(h.scene, h.problem), estimate=False,
-                           edge_windows=False)
+    solver = GeneralSolver(h.problem, h.friction, nodes, width=h.width, estimate=False, edge_windows=False)
     state = solver.initial_state(0.0)
     P, Q, M, S = h.loads(K, split)
     for i in range(1, P.size):
@@ -118,7 +80,7 @@ def ic_q(h: StuckHistory, n: int, K: int, split: int):
 
 
 def error(h: StuckHistory, K: int, x: np.ndarray, q: np.ndarray, points: int = 150) -> float:
-    left, right = h.edges(K, 1.0)
+    left, right = h.edges(K)
     W = right - left
     inner = np.flatnonzero((x > left + 0.03 * W) & (x < right - 0.03 * W))
     sel = inner[:: max(1, inner.size // points)]

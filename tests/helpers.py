@@ -6,8 +6,11 @@ A = 4 (1 - nu^2) / E with E = 200 GPa, nu = 0.3; f = 0.6; P0 = 1e5 N/m.
 """
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Callable, Iterable
+
+import numpy as np
 
 from halfslip.geometry import Hertz, NormalProblem, RoundedPunch
 from halfslip.state import Loads
@@ -146,3 +149,44 @@ def as_from_a_terminal() -> None:
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+_GAUSS_U, _GAUSS_W = np.polynomial.legendre.leggauss(40)
+
+
+def stuck_shear(problem, path, x):
+    """The exact shear at ``x`` after the straight steps ``path`` (tuples P, Q, M, sigma from zero) while every
+    point sticks: by (M1) with the sigma term, the fully stuck increments dQ / (pi sqrt(d^2 - s^2)) + dsigma s /
+    (4 sqrt(d^2 - s^2)) (s = x - c) over the contacts (centre c, half-width d: the normal problem's at each
+    node) from x's arrival on (found by bisection), the inverse square root there taken out by lam = lam_x + (1 -
+    lam_x) u^2, 40 Gauss points in u."""
+    loads = [(0.0, 0.0, 0.0, 0.0), *path]
+
+    def edges(k, lam):
+        (Pa, _, Ma, _), (Pb, _, Mb, _) = loads[k - 1], loads[k]
+        sol = problem.solve(Pa + lam * (Pb - Pa), Ma + lam * (Mb - Ma))
+        return sol.left, sol.right
+
+    total = 0.0
+    u, w = 0.5 * (_GAUSS_U + 1.0), 0.5 * _GAUSS_W
+    for k in range(1, len(loads)):
+        if loads[k - 1][0] > 0.0 and edges(k, 0.0)[0] < x < edges(k, 0.0)[1]:
+            arrival = 0.0
+        else:
+            left, right = edges(k, 1.0)
+            if not left < x < right:
+                continue
+            lo, hi = 0.0, 1.0
+            for _ in range(50):
+                mid = 0.5 * (lo + hi)
+                left, right = edges(k, mid)
+                lo, hi = (lo, mid) if left < x < right else (mid, hi)
+            arrival = hi
+        dQ, dS = loads[k][1] - loads[k - 1][1], loads[k][3] - loads[k - 1][3]
+        for ui, wi in zip(u, w):
+            lam = arrival + (1.0 - arrival) * ui * ui
+            left, right = edges(k, lam)
+            c, d = 0.5 * (left + right), 0.5 * (right - left)
+            root = math.sqrt(max(d * d - (x - c) ** 2, 1e-300))
+            total += wi * 2.0 * (1.0 - arrival) * ui * (dQ / (math.pi * root) + dS * (x - c) / (4.0 * root))
+    return total

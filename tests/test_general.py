@@ -380,51 +380,10 @@ ARRIVAL_PATH_BUG = (
     "by 1.5e-3 of max q at every resolution (the normal problem's own edges along the step: 1.6e-4 / 3.7e-5 at "
     "1024 / 2048 nodes); the step's shear estimate (1.9e-4 of f P at 1024 nodes) is below its L1 error "
     "(4.6e-4); docs/general_solver.md, Limits, 'Arrival locks on a moving contact'")
-_GAUSS_U, _GAUSS_W = np.polynomial.legendre.leggauss(40)
-
-
-def stuck_shear(problem, path, x):
-    """The exact shear at ``x`` after the straight steps ``path`` (tuples P, Q, M, sigma from zero) while every
-    point sticks: by (M1) with the sigma term, the fully stuck increments dQ / (pi sqrt(d^2 - s^2)) + dsigma s /
-    (4 sqrt(d^2 - s^2)) (s = x - c) over the contacts (centre c, half-width d: the normal problem's at each
-    node) from x's arrival on (found by bisection), the inverse square root there taken out by lam = lam_x + (1 -
-    lam_x) u^2, 40 Gauss points in u."""
-    loads = [(0.0, 0.0, 0.0, 0.0), *path]
-
-    def edges(k, lam):
-        (Pa, _, Ma, _), (Pb, _, Mb, _) = loads[k - 1], loads[k]
-        sol = problem.solve(Pa + lam * (Pb - Pa), Ma + lam * (Mb - Ma))
-        return sol.left, sol.right
-
-    total = 0.0
-    u, w = 0.5 * (_GAUSS_U + 1.0), 0.5 * _GAUSS_W
-    for k in range(1, len(loads)):
-        if loads[k - 1][0] > 0.0 and edges(k, 0.0)[0] < x < edges(k, 0.0)[1]:
-            arrival = 0.0
-        else:
-            left, right = edges(k, 1.0)
-            if not left < x < right:
-                continue
-            lo, hi = 0.0, 1.0
-            for _ in range(50):
-                mid = 0.5 * (lo + hi)
-                left, right = edges(k, mid)
-                lo, hi = (lo, mid) if left < x < right else (mid, hi)
-            arrival = hi
-        dQ, dS = loads[k][1] - loads[k - 1][1], loads[k][3] - loads[k - 1][3]
-        for ui, wi in zip(u, w):
-            lam = arrival + (1.0 - arrival) * ui * ui
-            left, right = edges(k, lam)
-            c, d = 0.5 * (left + right), 0.5 * (right - left)
-            root = math.sqrt(max(d * d - (x - c) ** 2, 1e-300))
-            total += wi * 2.0 * (1.0 - arrival) * ui * (dQ / (math.pi * root) + dS * (x - c) / (4.0 * root))
-    return total
-
-
 @pytest.mark.parametrize("nodes", [512, 1024])
 def test_a_contact_growing_under_a_moment_sticks_as_m1_says(nodes):
     """P, Q, M and sigma in proportion from zero (MOVING_GROWTH): both steps stick everywhere, and the shear
-    after the forming step is the exact fully stuck one (stuck_shear) to FORMING_STUCK_TOL. After the second,
+    after the forming step is the exact fully stuck one (helpers.stuck_shear) to FORMING_STUCK_TOL. After the second,
     whose contact starts in contact and grows while the moment moves it, the shear is off by an amount the
     cell does not reduce: the recorded outcome of ARRIVAL_PATH_BUG, asserted (GROWING_STUCK_RECORDED)."""
     problem, solver = make("hertz", nodes, width=MOVING_GROWTH_WIDTH)
@@ -434,7 +393,7 @@ def test_a_contact_growing_under_a_moment_sticks_as_m1_says(nodes):
         assert report.regime == Regime.STICK and not report.slipped and report.converged
         W = state.contact_right - state.contact_left
         x = np.linspace(state.contact_left + 0.03 * W, state.contact_right - 0.03 * W, 31)
-        exact = np.array([stuck_shear(problem, MOVING_GROWTH[:k], v) for v in x])
+        exact = np.array([helpers.stuck_shear(problem, MOVING_GROWTH[:k], v) for v in x])
         _, q = solver.tractions(state.memory, x)
         errors.append(float(np.max(np.abs(q - exact)) / np.max(np.abs(exact))))
     assert errors[0] <= FORMING_STUCK_TOL[nodes], errors

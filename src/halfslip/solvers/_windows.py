@@ -251,8 +251,9 @@ class EdgeWindows:
         ``interior``, a check window around the outermost stick point on that side (:meth:`_check`: both its ends
         cuts, its locks smoothed, not kept, its error its own placement) after the take ``fine`` (``old``: the state's
         windows on the same fine cells, :class:`_Old`): (its EdgeWindow (None for a check), its outermost stick
-        point or None, that point's own error estimate [m] or None); at a contact edge where all its lattice cells slip and the
-        lattice's edge on its side lies beyond its reach (REACH_MARGIN), not solved (:meth:`_slipping`)."""
+        point or None, that point's own error estimate [m] or None); at a contact edge where all its lattice cells
+        slip and the lattice's edge on its side lies beyond its reach (REACH_MARGIN), not solved
+        (:meth:`_slipping`)."""
         S, R, WC = self.solver, self.refine, self.cells
         h, N1, m1, mem0 = ctx.h, ctx.N1, fine.memory, state.memory
         n = m1.q.size
