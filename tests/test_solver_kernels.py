@@ -23,20 +23,34 @@ from halfslip.state import Loads
 from helpers import A, P0, PROFILES
 
 EPS = np.finfo(float).eps
+#: (kind, short) of the random steps that give tables: Hertz's short steps keep their single cubic (within the
+#: allowance: the first check of EdgePath._verify), the punch's need tables on short steps too.
+TABLE_STEPS = [("hertz", False), ("punch", False), ("punch", True)]
 
 
 # -- arrival fractions --------------------------------------------------------------------------------
 
 
-def _hermite_paths(kind: str, count: int, seed: int, short: bool = False) -> list[EdgePath]:
+def _hermite_paths(kind: str, count: int, seed: int, short: bool = False, table: bool = False) -> list[EdgePath]:
     """Hermite edge paths between real normal solutions: P and M changed at random (``short``: by ~1e-3),
     with Q and sigma changed too (they move no edge; the arrival strains are driven by them): dQ up to
-    0.3 f P0, dsigma so that (pi/4) a dsigma <= 0.3 dQ (the two terms of the strain never cancel much)."""
+    0.3 f P0, dsigma so that (pi/4) a dsigma <= 0.3 dQ (the two terms of the strain never cancel much).
+    The single cubic is kept whatever its error (ARRIVAL_LOCK_TOL raised while they are made); with ``table``
+    the paths as the solver makes them, each checked to be a table (EdgePath._verify)."""
+    with pytest.MonkeyPatch.context() as mp:
+        if not table:
+            mp.setattr(gp, "ARRIVAL_LOCK_TOL", 1e3)
+        return _random_paths(kind, count, seed, short, "table" if table else "hermite")
+
+
+def _random_paths(kind, count, seed, short, want):
     problem = NormalProblem(PROFILES[kind], A)
     a = problem.solve(P0, 0.0).half_width
     rng = np.random.default_rng(seed)
     paths = []
-    while len(paths) < count:
+    for _ in range(50 * count):
+        if len(paths) == count:
+            break
         P0_, M0 = P0 * rng.uniform(0.5, 1.5), rng.uniform(-0.2, 0.2) * P0 * a
         if short:
             P1, M1 = P0_ * (1.0 + rng.uniform(-2e-3, 2e-3)), M0 + rng.uniform(-2e-3, 2e-3) * P0 * a
@@ -46,8 +60,11 @@ def _hermite_paths(kind: str, count: int, seed: int, short: bool = False) -> lis
         dS = rng.uniform(-0.3, 0.3) * dQ * 4.0 / (math.pi * a)
         loads0, loads1 = Loads(P0_, 0.0, M0, 0.0), Loads(P1, dQ, M1, dS)
         path = EdgePath(problem, problem.solve(P0_, M0), problem.solve(P1, M1), loads0, loads1)
-        assert path._kind == "hermite"
+        if want == "table" and path._kind == "hermite":
+            continue  # no edge grows, or the single cubic is within the allowance (short steps): no table
+        assert path._kind == want, (path._kind, path.error)
         paths.append(path)
+    assert len(paths) == count, f"{len(paths)} of {count} {want} paths"
     return paths
 
 
@@ -203,19 +220,20 @@ def test_arrival_strains_is_its_quadrature_rule_to_rounding(short):
                 assert gk == pytest.approx(ref, rel=1e-12, abs=0.0)
 
 
-@pytest.mark.parametrize("kind", ["hertz", "punch"])
-@pytest.mark.parametrize("short", [False, True])
-def test_the_compiled_arrival_integrals_are_the_array_route(kind, short):
+@pytest.mark.parametrize(("kind", "short", "table"), [(k, s, False) for k in ("hertz", "punch") for s in (False, True)]
+                         + [(k, s, True) for k, s in TABLE_STEPS])
+def test_the_compiled_arrival_integrals_are_the_array_route(kind, short, table):
     """GeneralSolver's _integrate on a hermite path (the integrals from an edge out to arriving points, per unit
     Q' and sigma', and the distance) in one compiled pass (_general_path.hermite_integrals, since 0.4.3) against
     the array route it replaced (arrival_strain_parts at the Gauss points of each segment, summed outward by
     numpy): the same quadrature in another order of summation, so equal to rounding (1e-13 of the largest
     integral; measured 0); points inside at the start, on the end edge and beyond the edge's reach included.
-    (The strain itself, one compiled function for both since 0.4.3, is checked against 40 digits above.)"""
+    (The strain itself, one compiled function for both since 0.4.3, is checked against 40 digits above.)
+    With ``table``: the same on the paths' tables (since 0.4.13)."""
     from halfslip.solvers import general as gm
 
     rng = np.random.default_rng(17)
-    for path in _hermite_paths(kind, 4, seed=31 if short else 8, short=short):
+    for path in _hermite_paths(kind, 4, seed=31 if short else 8, short=short, table=table):
         for side in (-1, 1):
             i = 0 if side < 0 else 1
             x = np.sort(_test_points(path, side, rng))[::side]
@@ -233,6 +251,102 @@ def test_the_compiled_arrival_integrals_are_the_array_route(kind, short):
             for c in (0, 1):
                 scale = float(np.max(np.abs(ref[:, c])))
                 assert np.max(np.abs(got[c] - ref[:, c])) <= 1e-13 * scale, (kind, short, side, c)
+
+
+# -- edge tables (EdgePath._verify, since 0.4.13) ------------------------------------------------------------
+
+
+def _growing(path: EdgePath) -> np.ndarray:
+    return np.array([path._h0[0] - path._h1[0], path._h1[1] - path._h0[1]]) > 0.0
+
+
+def _allowance(path: EdgePath) -> float:
+    """What EdgePath._verify lets a growing edge be off by (its rule, restated)."""
+    width = path._h1[1] - path._h1[0]
+    travel = np.abs(path._h1 - path._h0)[_growing(path)]
+    return float(np.min(np.maximum(gp.ARRIVAL_LOCK_TOL**2 * travel, gp.PATH_ROUNDING * width)))
+
+
+def _solved_edges(path: EdgePath, lam: np.ndarray) -> np.ndarray:
+    start = path.problem.solve(path.loads0.P, path.loads0.M)
+    return np.array([[s.left, s.right] for s in (path.problem.solve(*path._PM(v), near=start) for v in lam)])
+
+
+@pytest.mark.parametrize(("kind", "short"), TABLE_STEPS)
+def test_a_table_path_is_the_normal_problem_to_its_allowance(kind, short):
+    """Random steps (P, M changed, some edge growing) as the solver makes their paths: the table's edges at
+    201 points of the step against the normal problem's own there. The growing edges within the allowance
+    (ARRIVAL_LOCK_TOL^2 of their travel, at least PATH_ROUNDING of the width), and within the path's own
+    error estimate (``error``) and the normal solver's rounding (the allowance's floor): both the rule and
+    the estimate can fail, a path off by its cubic's error (1e-6 to 1e-4 of the width on the long steps)
+    fails both. (The random moments stay below 0.2 a P0: no edge crosses the punch's flat end, where the path
+    has a kink; docs/general_solver.md, Limits.)"""
+    lam = np.linspace(0.0, 1.0, 201)
+    for path in _hermite_paths(kind, 4, seed=41 if short else 43, short=short, table=True):
+        grow = _growing(path)
+        width = path._h1[1] - path._h1[0]
+        off = np.abs(np.array(path.edges(lam)).T - _solved_edges(path, lam))[:, grow].max()
+        assert off <= _allowance(path), (off / width, path.solves, path.error)
+        assert off <= path.error * width + gp.PATH_ROUNDING * width, (off / width, path.error)
+        with pytest.MonkeyPatch.context() as mp:  # the same step's single cubic: off by far more
+            mp.setattr(gp, "ARRIVAL_LOCK_TOL", 1e3)
+            cubic = EdgePath(path.problem, path.problem.solve(path.loads0.P, path.loads0.M),
+                             path.problem.solve(path.loads1.P, path.loads1.M), path.loads0, path.loads1)
+        assert np.abs(np.array(cubic.edges(lam)).T - _solved_edges(path, lam))[:, grow].max() > 10.0 * off
+
+
+def _table_bisection(path: EdgePath, x: np.ndarray, side: int) -> np.ndarray:
+    """The reference: 60 bisection steps on "x inside at lam" on the table's own edges, in the offset form
+    (side (h0 - x) + side d(lam) > 0, d the table's offset from the start h0)."""
+    col = 0 if side < 0 else 1
+    out = []
+    for xk in x:
+        lo, hi = path.lam_lo, 1.0
+        r = side * (path._h0[col] - xk)
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            inside = r + side * gp._table_at(mid, path._tv, path._td, col) > 0.0
+            lo, hi = (lo, mid) if inside else (mid, hi)
+        out.append(0.5 * (lo + hi))
+    left, right = path.start()
+    return np.where((x > left) & (x < right), path.lam_lo, np.array(out))
+
+
+@pytest.mark.parametrize(("kind", "short"), TABLE_STEPS)
+def test_a_table_arrival_is_the_bisection_on_the_table(kind, short):
+    """EdgePath.arrival on a table (bisection to a quarter of a piece, then Newton on the piece) against the
+    bisection itself on the same table: equal to the rounding of the offset form, 16 eps of the edge's travel
+    over its rate (and 1e-15 in lam); points inside at the start and beyond the edge's reach included."""
+    rng = np.random.default_rng(19)
+    for path in _hermite_paths(kind, 4, seed=45, short=short, table=True):
+        for side in (-1, 1):
+            x = _test_points(path, side, rng)
+            got = path.arrival(x, side)
+            ref = _table_bisection(path, x, side)
+            col = 0 if side < 0 else 1
+            rate = np.abs([gp._table_slope(v, path._tv, path._td, col) for v in got])
+            travel = abs(path._h1[col] - path._h0[col])
+            with np.errstate(divide="ignore"):
+                band = 1e-15 + 16.0 * EPS * travel / rate
+            assert np.all(np.abs(got - ref) <= band), np.max(np.abs(got - ref) - band)
+
+
+def test_a_sub_step_path_is_its_part_of_the_step_path():
+    """A sub-step's path made from its step's (GeneralSolver's sub-steps; ``parent``): no normal solve, its
+    edges at lam' those of the step's at a + (b - a) lam' to the step's allowance, its own ends exact."""
+    lam = np.linspace(0.0, 1.0, 101)
+    for path in _hermite_paths("hertz", 3, seed=47, table=True):
+        problem = path.problem
+        for a, b in ((0.0, 0.25), (0.25, 0.5), (0.6, 1.0)):
+            loads = [Loads(*(u + t * (v - u) for u, v in zip(path.loads0, path.loads1))) for t in (a, b)]
+            ends = [problem.solve(v.P, v.M) for v in loads]
+            part = EdgePath(problem, *ends, *loads, parent=(path, a, b))
+            assert part.solves == 0 and part.kind == "table" and part.error == path.error
+            whole = np.array(path.edges(a + (b - a) * lam)).T
+            mine = np.array(part.edges(lam)).T
+            assert np.abs(mine - whole)[:, _growing(path)].max() <= 2.0 * _allowance(path)
+            assert tuple(mine[0]) == (ends[0].left, ends[0].right)
+            assert tuple(mine[-1]) == (ends[1].left, ends[1].right)
 
 
 # -- the Toeplitz lattice -------------------------------------------------------------------------------

@@ -20,10 +20,12 @@ rest (tanh-sinh in u, for the weak singularity where contact forms).
 """
 from __future__ import annotations
 
+import functools
 import math
 
 import numba
 import numpy as np
+from numpy.polynomial import chebyshev as cheb
 
 from ..geometry import NormalProblem, NormalSolution
 from ..state import Loads
@@ -40,7 +42,23 @@ NEWTON_STEPS = 60
 #: Half-width (in lam) of the neighbourhood of an extremum of a hermite edge in which the bisection is
 #: followed step by step rather than replaced by Newton (the edge is not safely monotone there).
 EXTREMUM_MARGIN = 1e-9
-
+#: Relative error of an arrival's locked displacement that a step's edge path may cause, at most. An edge off by
+#: delta moves the arrival of the points it passes, and with it their locks by the inverse-square-root strain's
+#: integral over that distance, about sqrt(delta / travel) of what a point locks in over the step (travel: the
+#: edge's motion in it), so a path is accepted when its error is below ARRIVAL_LOCK_TOL^2 travel.
+ARRIVAL_LOCK_TOL = 1e-6
+#: An edge error that rounding alone can make, relative to the contact's width: the normal problem's edges
+#: scatter about a smooth interpolant through them by up to 1.2e-13 of the width (the random histories, 33
+#: points), the Newton of its contact equations stopping at the rounding of their residual.
+PATH_ROUNDING = 1e-12
+#: A level's error at most this times the one before's, twice the points: geometric convergence (an edge
+#: analytic along the step) rather than algebraic (a kink in the path: 2^-1 to 2^-3 a doubling), so the next
+#: level's error is extrapolated (EdgePath._verify).
+GEOMETRIC_RATIO = 1e-3
+#: Chebyshev-Lobatto nodes at most of a step's edge path (the levels 5, 9, 17, 33: each holds the one before).
+PATH_NODES = 33
+#: Cubic pieces at most of a step's edge table (EdgePath._verify; 8 bytes x 4 a piece).
+TABLE_PIECES = 4096
 
 
 def _tanh_sinh(n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -74,6 +92,9 @@ class EdgePath:
     end : NormalSolution
         Solution at the end (in contact).
     loads0, loads1 : Loads
+    parent : (EdgePath, a, b), optional
+        The verified path of a step of which this one is the part from fraction a to b (GeneralSolver's
+        sub-steps): its accuracy is inherited, without normal solves (:meth:`_inherit`).
 
     Attributes
     ----------
@@ -82,10 +103,13 @@ class EdgePath:
         starts separated).
     solves : int
         Normal solves made here.
+    error : float
+        The estimated largest error of a growing edge along the path, relative to the contact's width at the
+        end (0 where the path is exact or no edge grows; steps starting in contact only).
 
     Notes
     -----
-    Three representations: the symmetric profiles with M = 0 all along use the
+    Four representations: the symmetric profiles with M = 0 all along use the
     vectorised a(P) and P(a) of the normal problem (exact; since 0.4.5 only
     where they are closed forms, or where the step starts separated: a
     symmetric tabulated profile's steps in contact take the hermite form,
@@ -96,16 +120,22 @@ class EdgePath:
     mu); any other step uses the cubic Hermite interpolant of the end edges
     and their rates, the rates from the flat-punch increment (N3): an edge
     where the pressure behaves as k sqrt(dist) moves at 2 c / k, c the
-    inverse-square-root coefficient of the increment there.
+    inverse-square-root coefficient of the increment there, where one normal
+    solve at mid-step finds it accurate enough for the arrivals' locks, and
+    else a table of cubic pieces of an interpolant through normal solves
+    (:meth:`_verify`; since 0.4.13: the cubic alone put a growing Hertz
+    contact's locks 1.8e-3 of max q off at every cell size).
     """
 
     def __init__(self, problem: NormalProblem, start: NormalSolution | None, end: NormalSolution,
-                 loads0: Loads, loads1: Loads):
+                 loads0: Loads, loads1: Loads, parent: tuple[EdgePath, float, float] | None = None):
         self.problem = problem
         self.loads0, self.loads1 = loads0, loads1
         P0, P1 = loads0.P, loads1.P
         self.lam_lo = 0.0 if start is not None else max(0.0, P0 / (P0 - P1)) if P0 < P1 else 0.0
         self.solves = 0
+        self.error = 0.0
+        self._tv = self._td = _NO_TABLE  # the table's offsets from the start edges and slopes (kind "table")
         self._sides: dict[int, tuple] = {}
         self._arguments: dict[int, tuple] = {}  # hermite_arguments per side
         #: arrival integrals already taken along this step (GeneralSolver's _integrate): another take of the
@@ -140,6 +170,10 @@ class EdgePath:
             self._start = float(start.left), float(start.right)
             self._v0 = np.array(start.edge_rates(dP, dM))
             self._v1 = np.array(end.edge_rates(dP, dM))
+            if parent is None:
+                self._verify(start, end)
+            else:
+                self._inherit(*parent)
 
     def _PM(self, lam):
         l0, l1 = self.loads0, self.loads1
@@ -156,8 +190,99 @@ class EdgePath:
             mu = np.sqrt(np.clip((lam - self.lam_lo) / (1.0 - self.lam_lo), 0.0, 1.0))
             left, right = _barycentric(np.ascontiguousarray(mu).reshape(-1), self._mu, self._bary, self._edges)
             return left.reshape(lam.shape), right.reshape(lam.shape)
+        if self._kind == "table":
+            left, right = _table_edges(np.ascontiguousarray(lam).reshape(-1), self._h0, self._tv, self._td)
+            return left.reshape(lam.shape), right.reshape(lam.shape)
         left, right = _hermite_edges(np.ascontiguousarray(lam).reshape(-1), self._h0, self._v0, self._h1, self._v1)
         return left.reshape(lam.shape), right.reshape(lam.shape)
+
+    def _verify(self, start: NormalSolution, end: NormalSolution) -> None:
+        """Keep the hermite cubic where it is accurate enough for the arrivals' locks, else a table of cubic
+        pieces through an interpolant of normal solves (kind "table"); sets :attr:`error`.
+
+        A growing edge may be off by ARRIVAL_LOCK_TOL^2 times its travel in the step (the constant's comment),
+        never less than PATH_ROUNDING of the width. The cubic's error, lam^2 (1 - lam)^2 / 24 times the edge's
+        fourth derivative for a smooth edge, is largest at mid-step, where one normal solve measures it. Where
+        it is too large, the edges are interpolated through normal solves at the Chebyshev-Lobatto points of
+        the step, the levels of 5, 9, 17, 33 points each holding the one before: the points a level adds
+        measure the error of the one before. A level is kept when that error is within half the allowance (its
+        own is smaller still: Chebyshev interpolation of an edge analytic along the step converges
+        geometrically) or when its own error, extrapolated geometrically from the two before (their ratio at
+        most GEOMETRIC_RATIO: the decay established), is; else at PATH_NODES points, with the error measured last. The
+        compiled passes then read the edges from m equal cubic Hermite pieces of that interpolant
+        (:meth:`_tabulate`): O(1) an edge, as the single cubic; m doubles until the pieces are within the other
+        half of the allowance of the interpolant at their midpoints (where a piece's error is largest), from
+        m^4 = the single cubic's error over it."""
+        width = end.right - end.left
+        travel = np.array([start.left - end.left, end.right - start.right])
+        grows = travel > 0.0
+        if not grows.any():
+            return
+        allowed = float(np.min(np.maximum(ARRIVAL_LOCK_TOL**2 * travel, PATH_ROUNDING * width)[grows]))
+        problem = self.problem
+
+        def solve(lam):
+            self.solves += 1
+            sol = problem.solve(*self._PM(lam), near=start)
+            return sol.left, sol.right
+
+        mid = solve(0.5)
+        single = float(np.max(np.abs(np.array(self.edges(np.array([0.5])))[:, 0] - mid)[grows]))
+        if single <= allowed:
+            self.error = single / width
+            return
+        known = {0.0: (0.0, 0.0), 0.5: tuple(np.array(mid) - self._h0), 1.0: tuple(self._h1 - self._h0)}
+        errors = []  # per level from 5 points on, its largest error
+        n = 5
+        while True:
+            mu = _lobatto(n)
+            new = [m for m in mu.tolist() if m not in known]
+            values = np.array([solve(m) for m in new]) - self._h0  # offsets from the start
+            if n > 5:  # the level before, at the points this one adds
+                errors.append(float(np.max(np.abs(cheb.chebval(2.0 * np.array(new) - 1.0, coef).T - values)[:, grows])))
+            known.update(zip(new, map(tuple, values)))
+            coef = _lobatto_inverse(n) @ np.array([known[m] for m in mu.tolist()])  # (n, 2)
+            if errors:
+                own = errors[-1]
+                if len(errors) > 1 and errors[-1] <= GEOMETRIC_RATIO * errors[-2]:
+                    own = errors[-1] * (errors[-1] / errors[-2]) ** 2  # twice the points: the square of the ratio
+                if own <= 0.5 * allowed or n >= PATH_NODES:
+                    break
+            n = 2 * n - 1
+        self._coef, self._rate, self._origin = coef, 2.0 * cheb.chebder(coef), self._h0  # (rate: d/dlam)
+        m = 1 << max(1, math.ceil(0.25 * math.log2(max(2.0 * single / allowed, 1.0))))
+        while True:
+            self._tabulate(0.0, 1.0, m)
+            centres = (np.arange(m) + 0.5) / m
+            pieces = np.array(_table_edges(centres, np.zeros(2), self._tv, self._td)).T
+            table = float(np.max(np.abs(pieces - cheb.chebval(2.0 * centres - 1.0, coef).T)[:, grows]))
+            if table <= 0.5 * allowed or m >= TABLE_PIECES:
+                break
+            m *= 2
+        self.error = (own + table) / width
+
+    def _tabulate(self, a: float, b: float, m: int) -> None:
+        """This path's table (kind "table"): m equal cubic Hermite pieces of the interpolant ``_coef`` (a
+        Chebyshev series in 2 lam - 1 of the offsets from ``_origin``) over [a, b] of its step, which is this
+        path's [0, 1]: values and slopes at the knots from the series, at the two ends this path's own edges
+        and N3 rates (exact)."""
+        tv, td = _series_table(self._coef, self._rate, a, b, m)
+        tv += self._origin - self._h0
+        tv[0], tv[-1] = 0.0, self._h1 - self._h0
+        td[0], td[-1] = self._v0 / m, self._v1 / m
+        self._kind = "table"
+        self._m = m
+        self._tv, self._td = np.ascontiguousarray(tv), np.ascontiguousarray(td)
+
+    def _inherit(self, parent: EdgePath, a: float, b: float) -> None:
+        """The part [a, b] of ``parent``'s step, whose path was verified (:meth:`_verify`): a table parent's
+        interpolant tabulated over it with pieces no longer than the parent's, a hermite parent's accuracy
+        by this path's own cubic (exact at the ends, over a fraction of the step: its error falls with the
+        fourth power of that)."""
+        self.error = parent.error
+        if parent._kind == "table":
+            self._coef, self._rate, self._origin = parent._coef, parent._rate, parent._origin
+            self._tabulate(a, b, max(1, math.ceil(parent._m * (b - a))))
 
     def arrival(self, x: np.ndarray, side: int) -> np.ndarray:
         """Fraction lam_x at which each point of ``x`` (shape (n,)) enters the contact.
@@ -180,7 +305,9 @@ class EdgePath:
         result is that of the bisection in exact arithmetic to a few 1e-16,
         where the bisection on :meth:`edges` in floating point is off by up to
         eps |edge| / |d edge/d lam| (1e-12 for an edge moving 1e-4 of its
-        distance from the centre in the step).
+        distance from the centre in the step). A table (:func:`_table_arrival`)
+        bisects to a quarter of a piece and then takes Newton's steps on the
+        piece, in the same offset form.
         """
         x = np.asarray(x, dtype=float)
         if self._kind == "symmetric":
@@ -189,6 +316,11 @@ class EdgePath:
             return np.clip((Px - P0) / (P1 - P0), self.lam_lo, 1.0)
         if self._kind == "hermite":
             lam = self._hermite_arrival(x, side)
+        elif self._kind == "table":
+            col = 0 if side < 0 else 1
+            flat = np.ascontiguousarray(x, dtype=float).ravel()
+            lam = _table_arrivals(flat, side, col, float(self._h0[col]), self.lam_lo, BISECTION_STEPS, self._tv,
+                                  self._td).reshape(x.shape)
         else:
             lo, hi = self._bisect(x, side, np.full(x.shape, self.lam_lo), np.ones(x.shape), BISECTION_STEPS)
             lam = 0.5 * (lo + hi)
@@ -197,7 +329,8 @@ class EdgePath:
 
     @property
     def kind(self) -> str:
-        """"symmetric", "formation" or "hermite": how the edges are represented (the class's notes)."""
+        """"symmetric", "formation", "hermite" or "table": how the edges are represented (the class's
+        notes)."""
         return self._kind
 
     def hermite_arguments(self, side: int) -> tuple:
@@ -208,7 +341,8 @@ class EdgePath:
             (v0, dh, v1), h0, ext = self._side(side)
             left, right = self.start()
             got = self._arguments[side] = (self.lam_lo, left, right, self._h0, self._v0, self._h1, self._v1, h0, v0,
-                                           dh, v1, ext, EXTREMUM_MARGIN, BISECTION_STEPS, NEWTON_STEPS)
+                                           dh, v1, ext, EXTREMUM_MARGIN, BISECTION_STEPS, NEWTON_STEPS, self._tv,
+                                           self._td)
         return got
 
     def start(self) -> tuple[float, float]:
@@ -287,6 +421,166 @@ def _hermite_edges(lam, h0, v0, h1, v1):  # pragma: no cover - compiled
         left[i] = h00 * h0[0] + h10 * v0[0] + h01 * h1[0] + h11 * v1[0]
         right[i] = h00 * h0[1] + h10 * v0[1] + h01 * h1[1] + h11 * v1[1]
     return left, right
+
+
+_NO_TABLE = np.zeros((0, 2))
+_NO_TABLE.flags.writeable = False
+
+
+@numba.njit(cache=True)
+def _series_table(coef, rate, a, b, m):  # pragma: no cover - compiled
+    """The two Chebyshev series ``coef`` (n, 2) and ``rate`` (n - 1, 2), in t = 2 lam - 1, at the m + 1 equal
+    knots of [a, b] in lam (Clenshaw): the values, and the rates times (b - a) / m (per piece's parameter)."""
+    tv = np.empty((m + 1, 2))
+    td = np.empty((m + 1, 2))
+    scale = (b - a) / m
+    for k in range(m + 1):
+        t = 2.0 * (a + (b - a) * k / m) - 1.0
+        for c in range(2):
+            tv[k, c] = _clenshaw(coef[:, c], t)
+            td[k, c] = _clenshaw(rate[:, c], t) * scale
+    return tv, td
+
+
+@numba.njit(cache=True)
+def _clenshaw(c, t):  # pragma: no cover - compiled
+    """sum c_j T_j(t)."""
+    b1 = b2 = 0.0
+    for j in range(c.size - 1, 0, -1):
+        b1, b2 = 2.0 * t * b1 - b2 + c[j], b1
+    return t * b1 - b2 + c[0]
+
+
+@functools.cache
+def _lobatto(n: int) -> np.ndarray:
+    """The n Chebyshev-Lobatto points of [0, 1], ascending (0, 1/2 and 1 exact; those of n also those of 2n - 1,
+    to the bit: k pi / (n - 1) is (2k) pi / (2n - 2) in floating point)."""
+    mu = 0.5 * (1.0 - np.cos(np.arange(n) * math.pi / (n - 1)))
+    mu[0], mu[(n - 1) // 2], mu[-1] = 0.0, 0.5, 1.0
+    mu.flags.writeable = False
+    return mu
+
+
+@functools.cache
+def _lobatto_inverse(n: int) -> np.ndarray:
+    """The matrix taking values at :func:`_lobatto` (n) to the coefficients of their Chebyshev series in
+    2 lam - 1 (the inverse of its Vandermonde matrix there, whose condition number is below 2 for 5 to 33 points)."""
+    out = np.linalg.inv(cheb.chebvander(2.0 * _lobatto(n) - 1.0, n - 1))
+    out.flags.writeable = False
+    return out
+
+
+@numba.njit(cache=True)
+def _table_at(lam, tv, td, col):  # pragma: no cover - compiled
+    """Column ``col`` (0 left, 1 right) of the table at ``lam``: its cubic Hermite piece there (m equal pieces of
+    [0, 1], knot values ``tv`` and slopes ``td`` per piece's parameter), in :func:`_depth`'s offset form."""
+    m = tv.shape[0] - 1
+    p = min(max(int(lam * m), 0), m - 1)
+    s = lam * m - p
+    t = 1.0 - s
+    return tv[p, col] + s * (t * t * td[p, col] + s * ((3.0 - 2.0 * s) * (tv[p + 1, col] - tv[p, col])
+                                                        - t * td[p + 1, col]))
+
+
+@numba.njit(cache=True)
+def _table_edges(lam, h0, tv, td):  # pragma: no cover - compiled
+    """Left and right edges at each of ``lam`` (flat) from a table of offsets from the start edges ``h0``."""
+    left = np.empty(lam.size)
+    right = np.empty(lam.size)
+    for i in range(lam.size):
+        left[i] = h0[0] + _table_at(lam[i], tv, td, 0)
+        right[i] = h0[1] + _table_at(lam[i], tv, td, 1)
+    return left, right
+
+
+@numba.njit(cache=True)
+def _table_slope(lam, tv, td, col):  # pragma: no cover - compiled
+    """d/dlam of :func:`_table_at`."""
+    m = tv.shape[0] - 1
+    p = min(max(int(lam * m), 0), m - 1)
+    s = lam * m - p
+    return m * (6.0 * s * (1.0 - s) * (tv[p + 1, col] - tv[p, col]) + (s - 1.0) * (3.0 * s - 1.0) * td[p, col]
+                + s * (3.0 * s - 2.0) * td[p + 1, col])
+
+
+@numba.njit(cache=True)
+def _table_arrival(x, side, col, h0, lam_lo, steps, tv, td):  # pragma: no cover - compiled
+    """The limit of ``steps`` bisection steps on "x inside at lam" over [lam_lo, 1] (EdgePath.arrival) on the
+    ``side`` edge of a table (column ``col``, start ``h0``), "inside" as g = r + side d(lam) > 0 with r = side
+    (h0 - x) and d the table's offset (:func:`_depth`'s form: the rounding relative to the edge's motion).
+    Where both ends of the bracket are on their sides of the edge (g <= 0 at lam_lo, > 0 at 1): bisection
+    until the bracket is a quarter of a piece, then Newton kept in the bracket (the bisection would close in
+    on the same crossing: the table is monotone within a piece unless the edge turns there) to the rounding of
+    lam; else the bisection itself."""
+    lo, hi = lam_lo, 1.0
+    m = tv.shape[0] - 1
+    r = side * (h0 - x)
+    bracket = r + side * _table_at(lo, tv, td, col) <= 0.0 < r + side * _table_at(hi, tv, td, col)
+    k = 0
+    while k < steps and (not bracket or hi - lo > 0.25 / m):
+        mid = 0.5 * (lo + hi)
+        if r + side * _table_at(mid, tv, td, col) > 0.0:
+            hi = mid
+        else:
+            lo = mid
+        k += 1
+    if k == steps:
+        return 0.5 * (lo + hi)
+    lam = 0.5 * (lo + hi)
+    for _ in range(steps - k):
+        g = r + side * _table_at(lam, tv, td, col)
+        if g == 0.0:
+            break
+        if g > 0.0:
+            hi = lam
+        else:
+            lo = lam
+        slope = side * _table_slope(lam, tv, td, col)
+        new = lam - g / slope if slope != 0.0 else 0.5 * (lo + hi)
+        if not (lo < new < hi):
+            new = 0.5 * (lo + hi)
+        step = abs(new - lam)
+        lam = new
+        if step <= 2e-16 or hi - lo <= 4e-16:
+            break
+    return lam
+
+
+@numba.njit(cache=True)
+def _table_arrivals(x, side, col, h0, lam_lo, steps, tv, td):  # pragma: no cover - compiled
+    """:func:`_table_arrival` at each of ``x`` (flat)."""
+    out = np.empty(x.size)
+    for i in range(x.size):
+        out[i] = _table_arrival(x[i], side, col, h0, lam_lo, steps, tv, td)
+    return out
+
+
+@numba.njit(cache=True)
+def _table_strain(x, side, A, lam_lo, start_left, start_right, h0, side_h0, steps, tv, td):  # pragma: no cover
+    """:func:`_hermite_strain` on a table (see there)."""
+    col = 0 if side < 0 else 1
+    u = _U
+    n, k = x.size, u.size
+    span = np.empty(n)
+    left = np.empty((n, k))
+    right = np.empty((n, k))
+    gl = np.empty((n, k))
+    gr = np.empty((n, k))
+    for i in range(n):
+        xi = x[i]
+        lam_x = lam_lo if start_left < xi < start_right else _table_arrival(xi, side, col, h0[col], lam_lo, steps,
+                                                                             tv, td)
+        span[i] = lam_x - lam_lo
+        own = xi - side_h0
+        for j in range(k):
+            lam = lam_x - span[i] * u[j] ** 2
+            dl = _table_at(lam, tv, td, 0)
+            dr = _table_at(lam, tv, td, 1)
+            left[i, j] = h0[0] + dl
+            right[i, j] = h0[1] + dr
+            gl[i, j] = own - dl if side < 0 else xi - left[i, j]
+            gr[i, j] = own - dr if side > 0 else xi - right[i, j]
+    return _strain_sum(x, left, right, gl, gr, span, u, _W, A * side)
 
 
 @numba.njit(cache=True)
@@ -466,7 +760,7 @@ def arrival_strain_parts(path: EdgePath, x: np.ndarray, side: int, compliance: f
     x = np.asarray(x, dtype=float)
     if x.size == 0:
         return np.zeros((0, 2))
-    if path._kind == "hermite":
+    if path._kind in ("hermite", "table"):
         return _hermite_strain(np.ascontiguousarray(x), side, compliance, *path.hermite_arguments(side))
     lam_x = path.arrival(x, side)
     span = lam_x - path.lam_lo
@@ -478,13 +772,17 @@ def arrival_strain_parts(path: EdgePath, x: np.ndarray, side: int, compliance: f
 
 @numba.njit(cache=True)
 def _hermite_strain(x, side, A, lam_lo, start_left, start_right, h0, v0, h1, v1, side_h0, side_v0, side_dh,
-                    side_v1, ext, margin, steps, newton):  # pragma: no cover - compiled
+                    side_v1, ext, margin, steps, newton, tv, td):  # pragma: no cover - compiled
     """:func:`arrival_strain_parts` on a hermite path in one pass: each point's arrival (the bisection's limit,
     :func:`_hermite_arrivals`; lam_lo inside the contact at the start, (start_left, start_right)), the edges at
     the nodes lam_x - span u^2, the gap to the arriving edge from its divided difference
     (:func:`_hermite_gap`) and the strain sums (:func:`_strain_sum`). ``h0`` .. ``v1`` the edges' ends and
     rates (left, right), ``side_h0`` .. ``side_v1`` the ``side`` edge's start, rate, motion and end rate, ``ext``
-    its extrema (EdgePath.hermite_arguments)."""
+    its extrema (EdgePath.hermite_arguments). With a table (``tv`` of more than one row: kind "table") the edges
+    are its pieces', each arrival the limit of ``steps`` bisection steps (EdgePath.arrival's reference) and the
+    gap to the arriving edge its offset from the start less the table's."""
+    if tv.shape[0] > 1:
+        return _table_strain(x, side, A, lam_lo, start_left, start_right, h0, side_h0, steps, tv, td)
     r = np.empty(x.size)
     for k in range(x.size):
         r[k] = side * (side_h0 - x[k])
@@ -516,7 +814,7 @@ def _hermite_strain(x, side, A, lam_lo, start_left, start_right, h0, v0, h1, v1,
 
 @numba.njit(cache=True)
 def hermite_integrals(xs, edge, side, A, lam_lo, start_left, start_right, h0, v0, h1, v1, side_h0, side_v0,
-                      side_dh, side_v1, ext, margin, steps, newton, gauss_t, gauss_w):  # pragma: no cover - compiled
+                      side_dh, side_v1, ext, margin, steps, newton, tv, td, gauss_t, gauss_w):  # pragma: no cover
     """The arrival integrals of a hermite path from ``edge`` to each of ``xs`` (sorted outward on ``side``), per
     unit Q' and sigma', and the distance from the edge (columns 0, 1, 2; GeneralSolver's _integrate): on each
     segment between consecutive points the Gauss-Legendre points ``gauss_t`` (weights ``gauss_w``) of the
@@ -532,7 +830,7 @@ def hermite_integrals(xs, edge, side, A, lam_lo, start_left, start_right, h0, v0
         widths[i] = abs(b - a)
         a = b
     inc = _hermite_strain(pts, side, A, lam_lo, start_left, start_right, h0, v0, h1, v1, side_h0, side_v0, side_dh,
-                          side_v1, ext, margin, steps, newton)
+                          side_v1, ext, margin, steps, newton, tv, td)
     out = np.empty((n, 3))
     c0 = c1 = c2 = 0.0
     for i in range(n):

@@ -103,6 +103,9 @@ MAX_SUBSTEPS = 64
 #: against 6.9e-5: the shadow's longer sub-steps add their time error, on the safe side. One take of the
 #: whole step (no sub-steps for the shadow) would not converge: 4.2e-4 at 4096 nodes.
 SHADOW_EVERY = 4
+#: Loads of a sub-step off its step's line by at most this relative to the step's loads are on it (_on_line):
+#: GeneralSolver.step makes them as a + lam (b - a), each rounded once (a few eps).
+LINE_ROUNDING = 1e-12
 #: Cells a contact edge may advance in one sub-step while part of the contact slips (the arrivals' locked
 #: displacements: the shape of M1's increments, their size from the lattice, _take; measured in
 #: docs/general_solver.md).
@@ -455,6 +458,8 @@ class GeneralSolver(TangentialSolver):
         self._columns = _Kept(LOADS_KEPT)
         self._end_args = _Kept(LOADS_KEPT)  # _end_arguments' answers
         self._paths = _Kept(LOADS_KEPT)
+        #: the edge path of the step being cut into sub-steps: theirs are parts of it (_on_line)
+        self._line: EdgePath | None = None
         self._sums = _Kept(SUMS_KEPT)  # sum q of the recent takes' states, by their q (the next take's datum term)
         self.counters = dict.fromkeys(("steps", "substeps", "takes", "shadow_takes", "iterations", "cg_iterations",
                                        "restarts", "normal_solves"), 0)
@@ -501,10 +506,33 @@ class GeneralSolver(TangentialSolver):
                 return self._finish(state, t1, loads1, ctx, fine, None)[:2]
             end = (fine.memory.first, fine.memory.status.copy())
         self.counters["substeps"] += pieces
-        loads0, t0 = state.loads, state.t
         # a step from separation: the sub-steps share the part of the step in contact
+        loads0 = state.loads
         lo = 0.0 if state.memory.normal is not None or loads0.P >= 0.0 else loads0.P / (loads0.P - loads1.P)
         reports = []
+        self._line = ctx.path  # the sub-steps' edge paths are parts of the step's (_on_line)
+        try:
+            sub, spread = self._sub_steps(state, t1, loads1, ctx, rough, end, pieces, lo, reports)
+        finally:
+            self._line = None
+        last = reports[-1]
+        # the gross-sliding and separation messages speak of the step's end loads (a sub-step may slide or be
+        # separated while the end is not)
+        message = "; ".join(dict.fromkeys(r.message for r in reports if r.message and (
+            r is last or not (r.message == GROSS_SLIDING_MESSAGE or r.message.startswith(SEPARATED_PREFIX)))))
+        return sub, StepReport(last.regime, any(r.slipped for r in reports), any(r.normal_solved for r in reports),
+                               message,
+                               converged=all(r.converged for r in reports),
+                               residual=max(r.residual for r in reports),
+                               iterations=sum(r.iterations for r in reports),
+                               error_estimate=_at_least(last.error_estimate, spread),
+                               shear_error_estimate=last.shear_error_estimate)
+
+    def _sub_steps(self, state: ContactState, t1: float, loads1: Loads, ctx: "_Context", rough, end,
+                   pieces: int, lo: float, reports: list) -> tuple[ContactState, float]:
+        """:meth:`step`'s ``pieces`` equal sub-steps along its line from the fraction ``lo`` (their reports
+        appended to ``reports``); returns the last state and the spread of the widest stick intervals."""
+        loads0, t0 = state.loads, state.t
         spread = 0.0
         sub = shadow_from = state
         for k in range(1, pieces + 1):
@@ -526,18 +554,7 @@ class GeneralSolver(TangentialSolver):
                 shadow_from = sub
             spread = max(spread, apart)  # (0 from a sub-step the shadow waits in, unless the windows set it)
             reports.append(rep)
-        last = reports[-1]
-        # the gross-sliding and separation messages speak of the step's end loads (a sub-step may slide or be
-        # separated while the end is not)
-        message = "; ".join(dict.fromkeys(r.message for r in reports if r.message and (
-            r is last or not (r.message == GROSS_SLIDING_MESSAGE or r.message.startswith(SEPARATED_PREFIX)))))
-        return sub, StepReport(last.regime, any(r.slipped for r in reports), any(r.normal_solved for r in reports),
-                               message,
-                               converged=all(r.converged for r in reports),
-                               residual=max(r.residual for r in reports),
-                               iterations=sum(r.iterations for r in reports),
-                               error_estimate=_at_least(last.error_estimate, spread),
-                               shear_error_estimate=last.shear_error_estimate)
+        return sub, spread
 
     def _pieces(self, state: ContactState, ctx: "_Context", trial: "_Outcome") -> int:
         """Sub-steps for a step whose single solve is ``trial`` (the shadow's, or the fine lattice's where
@@ -637,7 +654,8 @@ class GeneralSolver(TangentialSolver):
             return None
         path = self._paths.get((loads0, loads1), (N0, N1))
         if path is None:
-            path = self._paths.put((loads0, loads1), (N0, N1), EdgePath(self.problem, N0, N1, loads0, loads1))
+            parent = _on_line(self._line, loads0, loads1) if N0 is not None else None
+            path = self._paths.put((loads0, loads1), (N0, N1), EdgePath(self.problem, N0, N1, loads0, loads1, parent))
             self.counters["normal_solves"] += path.solves
         return path
 
@@ -908,7 +926,7 @@ class GeneralSolver(TangentialSolver):
         numbers) where the old contact exists and the edge path is a hermite one: sets the arrived cells'
         locks in ``glock`` and returns their start displacements, the match points' ({side: value}) and the
         fit as a function of r0 (None: nothing fitted); None where the general path must take it."""
-        if path is None or path.kind != "hermite":
+        if path is None or path.kind not in ("hermite", "table"):
             return None
         N0, n = mem.normal, x.size
         olds, news = self._end_arguments(N0, mem.first, mem.q.size, h), self._end_arguments(N1, first, n, h)
@@ -1644,7 +1662,7 @@ def _integrate(path: EdgePath, xs: np.ndarray, edge: float, side: int, A: float,
         order = np.argsort(side * xs)
         xsorted = xs[order]
         parts = np.empty((xs.size, 3))
-        if path.kind == "hermite" and xs.size:
+        if path.kind in ("hermite", "table") and xs.size:
             parts[order] = hermite_integrals(np.ascontiguousarray(xsorted), edge, side, A,
                                              *path.hermite_arguments(side), _GL_T, _GL_W)
         else:
@@ -1664,6 +1682,26 @@ def _integrate(path: EdgePath, xs: np.ndarray, edge: float, side: int, A: float,
         l0, l1 = formation
         out = out + 0.25 * A * (l0.sigma + path.lam_lo * (l1.sigma - l0.sigma)) * parts[:, 2]
     return out
+
+
+def _on_line(line: EdgePath | None, loads0: Loads, loads1: Loads) -> tuple[EdgePath, float, float] | None:
+    """(line, a, b) where the straight step from ``loads0`` to ``loads1`` is the part [a, b] of ``line``'s step
+    (the sub-steps of GeneralSolver.step, their loads its own at the fractions a, b to rounding), else None."""
+    if line is None or line.kind not in ("hermite", "table"):
+        return None
+    l0, l1 = line.loads0, line.loads1
+    dP, dM = l1.P - l0.P, l1.M - l0.M
+    if dP == 0.0 and dM == 0.0:
+        return None
+    by_P = abs(dP) * (abs(l0.M) + abs(l1.M)) >= abs(dM) * (abs(l0.P) + abs(l1.P))
+    a, b = ((v.P - l0.P) / dP if by_P else (v.M - l0.M) / dM for v in (loads0, loads1))
+    if not 0.0 <= a < b <= 1.0:
+        return None
+    for lam, v in ((a, loads0), (b, loads1)):
+        for x0, x1, x in zip(l0, l1, v):
+            if abs(x0 + lam * (x1 - x0) - x) > LINE_ROUNDING * (abs(x0) + abs(x1)):
+                return None
+    return line, a, b
 
 
 def _toward(now: GeneralMemory, end, fraction: float):
