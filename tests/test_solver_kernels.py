@@ -349,6 +349,41 @@ def test_a_sub_step_path_is_its_part_of_the_step_path():
             assert tuple(mine[-1]) == (ends[1].left, ends[1].right)
 
 
+#: A step of the random punch history (benchmarks/random_histories.py, seed 1, step 41: its compliance and
+#: friction) whose left contact edge crosses the punch's flat end (-2e-3 m) at lam = 0.526: the path has a kink
+#: there (the pressure's x ln x at the flat's end), which no interpolant on the whole step resolves.
+KINKED_STEP = ((260087.52143121266, -54828.42418887594, 312.5843668902145, 52482879.35449438),
+               (259320.2794755171, -46718.52601852457, 246.58092046370382, 52447511.70188236))
+KINKED_COMPLIANCE = 3.165217391304348e-11
+
+
+def test_a_path_through_a_kink_says_it_is_not_within_its_allowance():
+    """KINKED_STEP: the path is a table, not within the allowance (``within`` False), its error estimate (the
+    last interpolant's, measured by normal solves halfway between its points) 1.38e-3 of the width against
+    1.53e-3 measured at 2001 points (asserted: at least half of that, and far above the allowance); the
+    single cubic is off by 2.7e-2. A general solver's step along it says so in its message, which the
+    result files as kind ``edge_path`` with the estimate as its value (halfslip.messages)."""
+    from halfslip.geometry import RoundedPunch
+    from halfslip.messages import classify
+    from halfslip.solvers.general import GeneralSolver
+
+    import helpers
+
+    problem = NormalProblem(RoundedPunch(2e-3, 10e-3), KINKED_COMPLIANCE)
+    loads0, loads1 = (Loads(*v) for v in KINKED_STEP)
+    path = EdgePath(problem, problem.solve(loads0.P, loads0.M), problem.solve(loads1.P, loads1.M), loads0, loads1)
+    assert path.kind == "table" and not path.within
+    lam = np.linspace(0.0, 1.0, 2001)
+    width = path._h1[1] - path._h1[0]
+    off = np.abs(np.array(path.edges(lam)).T - _solved_edges(path, lam))[:, 0].max() / width
+    assert 0.5 * off <= path.error <= 2.0 * off
+    assert path.error * width > 1e6 * _allowance(path)
+    out = helpers.march(GeneralSolver(problem, 0.6, 512), list(KINKED_STEP))
+    entries = classify(out[-1][1].message)
+    assert [kind for kind, _, _ in entries] == ["edge_path"] and entries[0][1] == pytest.approx(path.error, rel=1e-2)
+    assert out[0][1].message == ""
+
+
 # -- the Toeplitz lattice -------------------------------------------------------------------------------
 
 from scipy.linalg import toeplitz  # noqa: E402

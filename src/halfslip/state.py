@@ -27,6 +27,13 @@ class Loads(NamedTuple):
 GROSS_SLIDING_MESSAGE = "abs(Q) > f P: gross sliding, shear force carried limited to f P"
 """What a step reports when the applied shear exceeds what friction can carry."""
 
+EDGE_PATH_MESSAGE = ("edge path: the contact edges along the step interpolated to {error:.3g} of the width only "
+                     "(the path is not smooth: a contact edge crossing a kink of the profile); the locks of the material arriving in the "
+                     "step are less accurate")
+"""What a step of the general solver reports when its contact edges along the step (from which the material
+arriving in it takes its locked displacement) could not be interpolated within their allowance
+(_general_path.EdgePath._verify); ``error`` relative to the contact's width."""
+
 
 class Regime(enum.IntEnum):
     """What a step did; stored in the ``regime`` variable of the result."""

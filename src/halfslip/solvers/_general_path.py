@@ -106,6 +106,9 @@ class EdgePath:
     error : float
         The estimated largest error of a growing edge along the path, relative to the contact's width at the
         end (0 where the path is exact or no edge grows; steps starting in contact only).
+    within : bool
+        Whether that is within the allowance (:meth:`_verify`; False where PATH_NODES points or TABLE_PIECES
+        pieces did not reach it: an edge crossing a kink of the profile, whose path is not smooth there).
 
     Notes
     -----
@@ -135,6 +138,7 @@ class EdgePath:
         self.lam_lo = 0.0 if start is not None else max(0.0, P0 / (P0 - P1)) if P0 < P1 else 0.0
         self.solves = 0
         self.error = 0.0
+        self.within = True
         self._tv = self._td = _NO_TABLE  # the table's offsets from the start edges and slopes (kind "table")
         self._sides: dict[int, tuple] = {}
         self._arguments: dict[int, tuple] = {}  # hermite_arguments per side
@@ -208,11 +212,13 @@ class EdgePath:
         measure the error of the one before. A level is kept when that error is within half the allowance (its
         own is smaller still: Chebyshev interpolation of an edge analytic along the step converges
         geometrically) or when its own error, extrapolated geometrically from the two before (their ratio at
-        most GEOMETRIC_RATIO: the decay established), is; else at PATH_NODES points, with the error measured last. The
+        most GEOMETRIC_RATIO: the decay established), is; else at PATH_NODES points, its own error measured by
+        normal solves halfway between them (where an interpolant's error peaks), :attr:`within` False. The
         compiled passes then read the edges from m equal cubic Hermite pieces of that interpolant
         (:meth:`_tabulate`): O(1) an edge, as the single cubic; m doubles until the pieces are within the other
-        half of the allowance of the interpolant at their midpoints (where a piece's error is largest), from
-        m^4 = the single cubic's error over it."""
+        half of the allowance of the interpolant at their midpoints (where a piece's error is largest; within a
+        tenth of the interpolant's own error where that is above the allowance), from m^4 = the single cubic's
+        error over it."""
         width = end.right - end.left
         travel = np.array([start.left - end.left, end.right - start.right])
         grows = travel > 0.0
@@ -246,7 +252,12 @@ class EdgePath:
                 own = errors[-1]
                 if len(errors) > 1 and errors[-1] <= GEOMETRIC_RATIO * errors[-2]:
                     own = errors[-1] * (errors[-1] / errors[-2]) ** 2  # twice the points: the square of the ratio
-                if own <= 0.5 * allowed or n >= PATH_NODES:
+                if own <= 0.5 * allowed:
+                    break
+                if n >= PATH_NODES:  # not within the allowance: this level's own error, measured between its points
+                    between = 0.5 * (mu[1:] + mu[:-1])
+                    solved = np.array([solve(m) for m in between.tolist()]) - self._h0
+                    own = float(np.max(np.abs(cheb.chebval(2.0 * between - 1.0, coef).T - solved)[:, grows]))
                     break
             n = 2 * n - 1
         self._coef, self._rate, self._origin = coef, 2.0 * cheb.chebder(coef), self._h0  # (rate: d/dlam)
@@ -256,10 +267,11 @@ class EdgePath:
             centres = (np.arange(m) + 0.5) / m
             pieces = np.array(_table_edges(centres, np.zeros(2), self._tv, self._td)).T
             table = float(np.max(np.abs(pieces - cheb.chebval(2.0 * centres - 1.0, coef).T)[:, grows]))
-            if table <= 0.5 * allowed or m >= TABLE_PIECES:
+            if table <= max(0.5 * allowed, 0.1 * own) or m >= TABLE_PIECES:
                 break
             m *= 2
         self.error = (own + table) / width
+        self.within = own <= 0.5 * allowed and table <= 0.5 * allowed
 
     def _tabulate(self, a: float, b: float, m: int) -> None:
         """This path's table (kind "table"): m equal cubic Hermite pieces of the interpolant ``_coef`` (a
@@ -279,7 +291,7 @@ class EdgePath:
         interpolant tabulated over it with pieces no longer than the parent's, a hermite parent's accuracy
         by this path's own cubic (exact at the ends, over a fraction of the step: its error falls with the
         fourth power of that)."""
-        self.error = parent.error
+        self.error, self.within = parent.error, parent.within
         if parent._kind == "table":
             self._coef, self._rate, self._origin = parent._coef, parent._rate, parent._origin
             self._tabulate(a, b, max(1, math.ceil(parent._m * (b - a))))

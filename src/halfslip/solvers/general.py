@@ -63,7 +63,7 @@ import numpy as np
 from .. import limits
 from .._geometry_kernels import _load_to_terms, _pressure_at, pairwise_sum
 from ..geometry import NormalProblem, NormalSolution
-from ..state import GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime, StepReport
+from ..state import EDGE_PATH_MESSAGE, GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime, StepReport
 from ..state import frozen as _frozen
 from ._general_path import EdgePath, arrival_strain_parts, hermite_integrals
 from ._windows import EdgeWindows, same_windows, window_size
@@ -462,7 +462,7 @@ class GeneralSolver(TangentialSolver):
         self._line: EdgePath | None = None
         self._sums = _Kept(SUMS_KEPT)  # sum q of the recent takes' states, by their q (the next take's datum term)
         self.counters = dict.fromkeys(("steps", "substeps", "takes", "shadow_takes", "iterations", "cg_iterations",
-                                       "restarts", "normal_solves"), 0)
+                                       "restarts", "normal_solves", "path_solves"), 0)
 
     # ------------------------------------------------------------------
     def initial_state(self, t0: float = 0.0) -> ContactState:
@@ -656,7 +656,7 @@ class GeneralSolver(TangentialSolver):
         if path is None:
             parent = _on_line(self._line, loads0, loads1) if N0 is not None else None
             path = self._paths.put((loads0, loads1), (N0, N1), EdgePath(self.problem, N0, N1, loads0, loads1, parent))
-            self.counters["normal_solves"] += path.solves
+            self.counters["path_solves"] += path.solves
         return path
 
     def _finish(self, state: ContactState, t1: float, loads1: Loads, ctx: "_Context", fine: "_Outcome",
@@ -739,6 +739,8 @@ class GeneralSolver(TangentialSolver):
         if not converged:
             message = "; ".join(m for m in (message, f"active set not converged (check residual {fine.residual:.3g} "
                                                       f"x tolerance)") if m)
+        if ctx.path is not None and not ctx.path.within:  # (the path's own outcome: the lattice's is above)
+            message = "; ".join(m for m in (message, EDGE_PATH_MESSAGE.format(error=ctx.path.error)) if m)
         return new, StepReport(regime, fine.slipped, ctx.normal_changed, message, converged=converged,
                                residual=fine.residual, iterations=fine.iterations, error_estimate=error,
                                shear_error_estimate=shear), spread
