@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .state import EDGE_PATH_MESSAGE, GROSS_SLIDING_MESSAGE
+from .state import EDGE_PATH_PATTERN, GROSS_SLIDING_MESSAGE
 
 
 @dataclass(frozen=True)
@@ -57,8 +57,7 @@ _PATTERNS = (
                                          r"\(Coulomb excess (?P<v>\S+) of f max p\)"), None),
     ("slip_solve_closest", re.compile(r"slip solve: no slip-zone configuration met the Coulomb and slip-direction "
                                       r"checks; kept the closest \(violation (?P<v>\S+) x tolerance\)"), None),
-    ("edge_path", re.compile(re.escape(EDGE_PATH_MESSAGE.split("{")[0]) + r"(?P<v>\S+)"
-                             + re.escape(EDGE_PATH_MESSAGE.split("}")[1])), None),
+    ("edge_path", EDGE_PATH_PATTERN, None),
 )
 
 

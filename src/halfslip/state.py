@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import enum
 import math
+import re
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
@@ -33,6 +34,9 @@ EDGE_PATH_MESSAGE = ("edge path: the contact edges along the step interpolated t
 """What a step of the general solver reports when its contact edges along the step (from which the material
 arriving in it takes its locked displacement) could not be interpolated within their allowance
 (_general_path.EdgePath._verify); ``error`` relative to the contact's width."""
+EDGE_PATH_PATTERN = re.compile(re.escape(EDGE_PATH_MESSAGE.split("{")[0]) + r"(?P<v>\S+)"
+                               + re.escape(EDGE_PATH_MESSAGE.split("}")[1]))
+"""EDGE_PATH_MESSAGE with any number (group ``v``)."""
 
 
 class Regime(enum.IntEnum):

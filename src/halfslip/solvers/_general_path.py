@@ -42,11 +42,19 @@ NEWTON_STEPS = 60
 #: Half-width (in lam) of the neighbourhood of an extremum of a hermite edge in which the bisection is
 #: followed step by step rather than replaced by Newton (the edge is not safely monotone there).
 EXTREMUM_MARGIN = 1e-9
-#: Relative error of an arrival's locked displacement that a step's edge path may cause, at most. An edge off by
-#: delta moves the arrival of the points it passes, and with it their locks by the inverse-square-root strain's
-#: integral over that distance, about sqrt(delta / travel) of what a point locks in over the step (travel: the
-#: edge's motion in it), so a path is accepted when its error is below ARRIVAL_LOCK_TOL^2 travel.
-ARRIVAL_LOCK_TOL = 1e-6
+#: The lattice's own error in the shear of a fully stuck growing contact, times (W / h)^2: measured 3.8e-5 /
+#: 9.3e-6 / 2.1e-6 of max q after the forming step at 1024 / 2048 / 4096 nodes (the random Hertz history's first
+#: step, benchmarks/stuck_growth_exact.py): 40, 39, 35.
+LATTICE_SHEAR_ERROR = 40.0
+#: The part of the arrivals' shear error a step's edge path may add, at most, of the lattice's own (above). An
+#: edge off by delta moves the arrival of the points it passes, and with it their locks by the inverse-square-root
+#: strain's integral over that distance: about sqrt(delta / travel) of what a point locks in over the step
+#: (travel: the edge's motion in it), and the shear of the arrived material follows its locks (at most one to
+#: one; measured 0.03 of it for the single cubic on the history above). So a path with cells h of the contact
+#: width W may be off by (PATH_SHARE LATTICE_SHEAR_ERROR (h / W)^2)^2 travel: 1.5e-11 travel at 1024 nodes.
+PATH_SHARE = 0.1
+#: The cell (h / W) a path is made for where no lattice is said (EdgePath's ``cell``): 2048 nodes'.
+DEFAULT_CELL = 1.0 / 2048
 #: An edge error that rounding alone can make, relative to the contact's width: the normal problem's edges
 #: scatter about a smooth interpolant through them by up to 1.2e-13 of the width (the random histories, 33
 #: points), the Newton of its contact equations stopping at the rounding of their residual.
@@ -95,6 +103,9 @@ class EdgePath:
     parent : (EdgePath, a, b), optional
         The verified path of a step of which this one is the part from fraction a to b (GeneralSolver's
         sub-steps): its accuracy is inherited, without normal solves (:meth:`_inherit`).
+    cell : float, optional
+        The cell of the lattice whose arrivals the path serves, relative to the contact's width at the end
+        (its allowance, :func:`allowance`; default DEFAULT_CELL).
 
     Attributes
     ----------
@@ -106,9 +117,11 @@ class EdgePath:
     error : float
         The estimated largest error of a growing edge along the path, relative to the contact's width at the
         end (0 where the path is exact or no edge grows; steps starting in contact only).
-    within : bool
-        Whether that is within the allowance (:meth:`_verify`; False where PATH_NODES points or TABLE_PIECES
-        pieces did not reach it: an edge crossing a kink of the profile, whose path is not smooth there).
+    excess : float
+        That over the allowance (:meth:`_verify`; above 1 where PATH_NODES points or TABLE_PIECES pieces did
+        not reach it: an edge crossing a kink of the profile, whose path is not smooth there). Above
+        1 / PATH_SHARE^2 the path's part of the arrivals' shear error may exceed the lattice's own:
+        :attr:`dominant`.
 
     Notes
     -----
@@ -131,14 +144,16 @@ class EdgePath:
     """
 
     def __init__(self, problem: NormalProblem, start: NormalSolution | None, end: NormalSolution,
-                 loads0: Loads, loads1: Loads, parent: tuple[EdgePath, float, float] | None = None):
+                 loads0: Loads, loads1: Loads, parent: tuple[EdgePath, float, float] | None = None,
+                 cell: float | None = None):
         self.problem = problem
+        self.cell = DEFAULT_CELL if cell is None else float(cell)
         self.loads0, self.loads1 = loads0, loads1
         P0, P1 = loads0.P, loads1.P
         self.lam_lo = 0.0 if start is not None else max(0.0, P0 / (P0 - P1)) if P0 < P1 else 0.0
         self.solves = 0
         self.error = 0.0
-        self.within = True
+        self.excess = 0.0
         self._tv = self._td = _NO_TABLE  # the table's offsets from the start edges and slopes (kind "table")
         self._sides: dict[int, tuple] = {}
         self._arguments: dict[int, tuple] = {}  # hermite_arguments per side
@@ -179,6 +194,12 @@ class EdgePath:
             else:
                 self._inherit(*parent)
 
+    @property
+    def dominant(self) -> bool:
+        """Whether the path's error may make more of the arrivals' shear error than the lattice's own (its
+        :attr:`excess` above 1 / PATH_SHARE^2: the lock error goes as the square root of the path's)."""
+        return self.excess > 1.0 / PATH_SHARE**2
+
     def _PM(self, lam):
         l0, l1 = self.loads0, self.loads1
         return l0.P + lam * (l1.P - l0.P), l0.M + lam * (l1.M - l0.M)
@@ -204,8 +225,8 @@ class EdgePath:
         """Keep the hermite cubic where it is accurate enough for the arrivals' locks, else a table of cubic
         pieces through an interpolant of normal solves (kind "table"); sets :attr:`error`.
 
-        A growing edge may be off by ARRIVAL_LOCK_TOL^2 times its travel in the step (the constant's comment),
-        never less than PATH_ROUNDING of the width. The cubic's error, lam^2 (1 - lam)^2 / 24 times the edge's
+        A growing edge may be off by :func:`allowance` (PATH_SHARE's comment), never less than PATH_ROUNDING of
+        the width. The cubic's error, lam^2 (1 - lam)^2 / 24 times the edge's
         fourth derivative for a smooth edge, is largest at mid-step, where one normal solve measures it. Where
         it is too large, the edges are interpolated through normal solves at the Chebyshev-Lobatto points of
         the step, the levels of 5, 9, 17, 33 points each holding the one before: the points a level adds
@@ -213,7 +234,7 @@ class EdgePath:
         own is smaller still: Chebyshev interpolation of an edge analytic along the step converges
         geometrically) or when its own error, extrapolated geometrically from the two before (their ratio at
         most GEOMETRIC_RATIO: the decay established), is; else at PATH_NODES points, its own error measured by
-        normal solves halfway between them (where an interpolant's error peaks), :attr:`within` False. The
+        normal solves halfway between them (where an interpolant's error peaks), :attr:`excess` above 1. The
         compiled passes then read the edges from m equal cubic Hermite pieces of that interpolant
         (:meth:`_tabulate`): O(1) an edge, as the single cubic; m doubles until the pieces are within the other
         half of the allowance of the interpolant at their midpoints (where a piece's error is largest; within a
@@ -224,7 +245,7 @@ class EdgePath:
         grows = travel > 0.0
         if not grows.any():
             return
-        allowed = float(np.min(np.maximum(ARRIVAL_LOCK_TOL**2 * travel, PATH_ROUNDING * width)[grows]))
+        allowed = allowance(travel[grows], width, self.cell)
         problem = self.problem
 
         def solve(lam):
@@ -235,7 +256,7 @@ class EdgePath:
         mid = solve(0.5)
         single = float(np.max(np.abs(np.array(self.edges(np.array([0.5])))[:, 0] - mid)[grows]))
         if single <= allowed:
-            self.error = single / width
+            self.error, self.excess = single / width, single / allowed
             return
         known = {0.0: (0.0, 0.0), 0.5: tuple(np.array(mid) - self._h0), 1.0: tuple(self._h1 - self._h0)}
         errors = []  # per level from 5 points on, its largest error
@@ -271,7 +292,7 @@ class EdgePath:
                 break
             m *= 2
         self.error = (own + table) / width
-        self.within = own <= 0.5 * allowed and table <= 0.5 * allowed
+        self.excess = (own + table) / allowed
 
     def _tabulate(self, a: float, b: float, m: int) -> None:
         """This path's table (kind "table"): m equal cubic Hermite pieces of the interpolant ``_coef`` (a
@@ -291,7 +312,7 @@ class EdgePath:
         interpolant tabulated over it with pieces no longer than the parent's, a hermite parent's accuracy
         by this path's own cubic (exact at the ends, over a fraction of the step: its error falls with the
         fourth power of that)."""
-        self.error, self.within = parent.error, parent.within
+        self.error, self.excess = parent.error, parent.excess
         if parent._kind == "table":
             self._coef, self._rate, self._origin = parent._coef, parent._rate, parent._origin
             self._tabulate(a, b, max(1, math.ceil(parent._m * (b - a))))
@@ -437,6 +458,14 @@ def _hermite_edges(lam, h0, v0, h1, v1):  # pragma: no cover - compiled
 
 _NO_TABLE = np.zeros((0, 2))
 _NO_TABLE.flags.writeable = False
+
+
+def allowance(travel: np.ndarray, width: float, cell: float) -> float:
+    """What a step's growing edges (``travel``: each one's motion in the step) may be off by along its path, for
+    a lattice of cells ``cell`` of the contact ``width``: the smallest of (PATH_SHARE LATTICE_SHEAR_ERROR
+    cell^2)^2 travel, never below PATH_ROUNDING width (the constants' comments)."""
+    share = PATH_SHARE * LATTICE_SHEAR_ERROR * cell * cell
+    return float(np.min(np.maximum(share * share * np.asarray(travel, dtype=float), PATH_ROUNDING * width)))
 
 
 @numba.njit(cache=True)

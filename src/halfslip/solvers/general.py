@@ -63,7 +63,7 @@ import numpy as np
 from .. import limits
 from .._geometry_kernels import _load_to_terms, _pressure_at, pairwise_sum
 from ..geometry import NormalProblem, NormalSolution
-from ..state import EDGE_PATH_MESSAGE, GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime, StepReport
+from ..state import EDGE_PATH_MESSAGE, EDGE_PATH_PATTERN, GROSS_SLIDING_MESSAGE, ContactState, Loads, Regime, StepReport
 from ..state import frozen as _frozen
 from ._general_path import EdgePath, arrival_strain_parts, hermite_integrals
 from ._windows import EdgeWindows, same_windows, window_size
@@ -517,9 +517,12 @@ class GeneralSolver(TangentialSolver):
             self._line = None
         last = reports[-1]
         # the gross-sliding and separation messages speak of the step's end loads (a sub-step may slide or be
-        # separated while the end is not)
+        # separated while the end is not); the edge path's of locks the step keeps (none where it ends sliding)
         message = "; ".join(dict.fromkeys(r.message for r in reports if r.message and (
             r is last or not (r.message == GROSS_SLIDING_MESSAGE or r.message.startswith(SEPARATED_PREFIX)))))
+        if last.regime == Regime.GROSS_SLIDING:
+            # (a step ending in gross sliding drops its sub-steps' edge path notes)
+            message = "; ".join(m for m in EDGE_PATH_PATTERN.sub("", message).split("; ") if m)
         return sub, StepReport(last.regime, any(r.slipped for r in reports), any(r.normal_solved for r in reports),
                                message,
                                converged=all(r.converged for r in reports),
@@ -655,7 +658,10 @@ class GeneralSolver(TangentialSolver):
         path = self._paths.get((loads0, loads1), (N0, N1))
         if path is None:
             parent = _on_line(self._line, loads0, loads1) if N0 is not None else None
-            path = self._paths.put((loads0, loads1), (N0, N1), EdgePath(self.problem, N0, N1, loads0, loads1, parent))
+            width = N1.right - N1.left
+            cell = (self.width if self.width is not None else width) / self.nodes / width
+            path = self._paths.put((loads0, loads1), (N0, N1),
+                                   EdgePath(self.problem, N0, N1, loads0, loads1, parent, cell))
             self.counters["path_solves"] += path.solves
         return path
 
@@ -739,7 +745,10 @@ class GeneralSolver(TangentialSolver):
         if not converged:
             message = "; ".join(m for m in (message, f"active set not converged (check residual {fine.residual:.3g} "
                                                       f"x tolerance)") if m)
-        if ctx.path is not None and not ctx.path.within:  # (the path's own outcome: the lattice's is above)
+        # the path's own outcome (the lattice's is above), where the locks take anything from it (a load change
+        # of Q or sigma) and keep it (not in gross sliding: every cell's slip resets its lock)
+        if (ctx.path is not None and ctx.path.dominant and regime != Regime.GROSS_SLIDING
+                and (loads1.Q, loads1.sigma) != (state.loads.Q, state.loads.sigma)):
             message = "; ".join(m for m in (message, EDGE_PATH_MESSAGE.format(error=ctx.path.error)) if m)
         return new, StepReport(regime, fine.slipped, ctx.normal_changed, message, converged=converged,
                                residual=fine.residual, iterations=fine.iterations, error_estimate=error,
