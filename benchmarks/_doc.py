@@ -1,7 +1,34 @@
-"""Writing a benchmark's table into a page of docs/ between its markers."""
+"""Writing a benchmark's table into a page of docs/ between its markers, and the package trees an A/B run
+times (this tree and a git revision's, in a temporary worktree)."""
 from __future__ import annotations
 
+import contextlib
+import subprocess
+import tempfile
 from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@contextlib.contextmanager
+def package_trees(against: str | None):
+    """{label: src folder}: this tree's, and with ``against`` first that git revision's (a temporary ``git
+    worktree``, removed after)."""
+    trees = {"this tree": ROOT / "src"}
+    if not against:
+        yield trees
+        return
+    rev = subprocess.run(["git", "rev-parse", "--short", against], cwd=ROOT, capture_output=True, text=True,
+                         check=True).stdout.strip()
+    with tempfile.TemporaryDirectory() as tmp:
+        where = Path(tmp) / rev
+        subprocess.run(["git", "worktree", "add", "--detach", str(where), rev], cwd=ROOT, check=True,
+                       capture_output=True)
+        try:
+            yield {rev: where / "src", "this tree": ROOT / "src"}
+        finally:
+            subprocess.run(["git", "worktree", "remove", "--force", str(where)], cwd=ROOT, check=False,
+                           capture_output=True)
 
 
 def write_section(page: Path, begin: str, end: str, text: str, heading: str) -> None:

@@ -31,7 +31,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _doc import write_section  # noqa: E402
+from _doc import package_trees, write_section  # noqa: E402
 
 DOC = ROOT / "docs" / "benchmarks.md"
 BEGIN, END = "<!-- examples: begin -->", "<!-- examples: end -->"
@@ -176,21 +176,8 @@ def main(argv=None) -> None:
     ap.add_argument("--examples", nargs="+", default=EXAMPLES, choices=EXAMPLES)
     ap.add_argument("--no-doc", action="store_true")
     args = ap.parse_args(argv)
-    trees = {"this tree": ROOT / "src"}
-    with tempfile.TemporaryDirectory() as tmp:
-        if args.against:
-            rev = subprocess.run(["git", "rev-parse", "--short", args.against], cwd=ROOT, capture_output=True,
-                                 text=True, check=True).stdout.strip()
-            where = Path(tmp) / rev
-            subprocess.run(["git", "worktree", "add", "--detach", str(where), rev], cwd=ROOT, check=True,
-                           capture_output=True)
-            trees = {rev: where / "src", "this tree": ROOT / "src"}
-        try:
-            results = measure(trees, args.repeat, args.examples)
-        finally:
-            if args.against:
-                subprocess.run(["git", "worktree", "remove", "--force", str(where)], cwd=ROOT, check=False,
-                               capture_output=True)
+    with package_trees(args.against) as trees:
+        results = measure(trees, args.repeat, args.examples)
     if not args.no_doc:
         write_doc(results, trees, argv)
 

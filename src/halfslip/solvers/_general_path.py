@@ -106,6 +106,10 @@ class EdgePath:
     cell : float, optional
         The cell of the lattice whose arrivals the path serves, relative to the contact's width at the end
         (its allowance, :func:`allowance`; default DEFAULT_CELL).
+    lazy : bool
+        Verify (or take the parent's part) on the first use of the edges rather than here.
+    tally : dict, optional
+        Counts the normal solves made for the path under "path_solves" (GeneralSolver's counters).
 
     Attributes
     ----------
@@ -145,8 +149,10 @@ class EdgePath:
 
     def __init__(self, problem: NormalProblem, start: NormalSolution | None, end: NormalSolution,
                  loads0: Loads, loads1: Loads, parent: tuple[EdgePath, float, float] | None = None,
-                 cell: float | None = None):
+                 cell: float | None = None, lazy: bool = False, tally: dict | None = None):
         self.problem = problem
+        self._tally = tally
+        self._pending: tuple | None = None  # what makes the path ready (lazy: on its first use)
         self.cell = DEFAULT_CELL if cell is None else float(cell)
         self.loads0, self.loads1 = loads0, loads1
         P0, P1 = loads0.P, loads1.P
@@ -176,7 +182,7 @@ class EdgePath:
             for li in lam:
                 sol = problem.solve(*self._PM(li))
                 edges.append((sol.left, sol.right))
-            self.solves = n
+            self._count(n)
             self._mu = mu
             self._edges = np.array(edges)  # (n, 2)
             self._bary = (-1.0) ** np.arange(n) * np.sin((np.arange(n) + 0.5) * math.pi / n)
@@ -189,16 +195,34 @@ class EdgePath:
             self._start = float(start.left), float(start.right)
             self._v0 = np.array(start.edge_rates(dP, dM))
             self._v1 = np.array(end.edge_rates(dP, dM))
-            if parent is None:
-                self._verify(start, end)
-            else:
-                self._inherit(*parent)
+            self._pending = (start, end) if parent is None else parent
+            if not lazy:
+                self._ready()
+
+    def _count(self, solves: int) -> None:
+        self.solves += solves
+        if self._tally is not None:
+            self._tally["path_solves"] += solves
+
+    def _ready(self) -> None:
+        """Verify the path (:meth:`_verify`), or take its part of its parent's (:meth:`_inherit`), if that is
+        still to be done: a lazy path (GeneralSolver's) does it on its first use, and a step in which no cell
+        arrives never uses it."""
+        if self._pending is None:
+            return
+        pending, self._pending = self._pending, None
+        if isinstance(pending[0], EdgePath):
+            pending[0]._ready()
+            self._inherit(*pending)
+        else:
+            self._verify(*pending)
 
     @property
     def dominant(self) -> bool:
         """Whether the path's error may make more of the arrivals' shear error than the lattice's own (its
-        :attr:`excess` above 1 / PATH_SHARE^2: the lock error goes as the square root of the path's)."""
-        return self.excess > 1.0 / PATH_SHARE**2
+        :attr:`excess` above 1 / PATH_SHARE^2: the lock error goes as the square root of the path's; False for
+        a lazy path not used yet: nothing took its edges)."""
+        return self._pending is None and self.excess > 1.0 / PATH_SHARE**2
 
     def _PM(self, lam):
         l0, l1 = self.loads0, self.loads1
@@ -206,6 +230,7 @@ class EdgePath:
 
     def edges(self, lam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Left and right contact edges at fractions ``lam`` (any shape) of the step."""
+        self._ready()
         lam = np.asarray(lam, dtype=float)
         if self._kind == "symmetric":
             P, _ = self._PM(lam)
@@ -249,7 +274,7 @@ class EdgePath:
         problem = self.problem
 
         def solve(lam):
-            self.solves += 1
+            self._count(1)
             sol = problem.solve(*self._PM(lam), near=start)
             return sol.left, sol.right
 
@@ -260,13 +285,15 @@ class EdgePath:
             return
         known = {0.0: (0.0, 0.0), 0.5: tuple(np.array(mid) - self._h0), 1.0: tuple(self._h1 - self._h0)}
         errors = []  # per level from 5 points on, its largest error
+        coef = np.zeros((1, 2))  # the series of the level before (none before the first)
         n = 5
         while True:
             mu = _lobatto(n)
             new = [m for m in mu.tolist() if m not in known]
             values = np.array([solve(m) for m in new]) - self._h0  # offsets from the start
             if n > 5:  # the level before, at the points this one adds
-                errors.append(float(np.max(np.abs(cheb.chebval(2.0 * np.array(new) - 1.0, coef).T - values)[:, grows])))
+                before = _series_at(coef, np.array(new))
+                errors.append(float(np.max(np.abs(before - values)[:, grows])))
             known.update(zip(new, map(tuple, values)))
             coef = _lobatto_inverse(n) @ np.array([known[m] for m in mu.tolist()])  # (n, 2)
             if errors:
@@ -278,16 +305,16 @@ class EdgePath:
                 if n >= PATH_NODES:  # not within the allowance: this level's own error, measured between its points
                     between = 0.5 * (mu[1:] + mu[:-1])
                     solved = np.array([solve(m) for m in between.tolist()]) - self._h0
-                    own = float(np.max(np.abs(cheb.chebval(2.0 * between - 1.0, coef).T - solved)[:, grows]))
+                    own = float(np.max(np.abs(_series_at(coef, between) - solved)[:, grows]))
                     break
             n = 2 * n - 1
-        self._coef, self._rate, self._origin = coef, 2.0 * cheb.chebder(coef), self._h0  # (rate: d/dlam)
+        self._coef, self._rate, self._origin = coef, _lobatto_rate(coef.shape[0]) @ coef, self._h0  # d/dlam
         m = 1 << max(1, math.ceil(0.25 * math.log2(max(2.0 * single / allowed, 1.0))))
         while True:
             self._tabulate(0.0, 1.0, m)
             centres = (np.arange(m) + 0.5) / m
             pieces = np.array(_table_edges(centres, np.zeros(2), self._tv, self._td)).T
-            table = float(np.max(np.abs(pieces - cheb.chebval(2.0 * centres - 1.0, coef).T)[:, grows]))
+            table = float(np.max(np.abs(pieces - _series_at(coef, centres))[:, grows]))
             if table <= max(0.5 * allowed, 0.1 * own) or m >= TABLE_PIECES:
                 break
             m *= 2
@@ -342,6 +369,7 @@ class EdgePath:
         bisects to a quarter of a piece and then takes Newton's steps on the
         piece, in the same offset form.
         """
+        self._ready()
         x = np.asarray(x, dtype=float)
         if self._kind == "symmetric":
             P0, P1 = self.loads0.P, self.loads1.P
@@ -364,6 +392,7 @@ class EdgePath:
     def kind(self) -> str:
         """"symmetric", "formation", "hermite" or "table": how the edges are represented (the class's
         notes)."""
+        self._ready()
         return self._kind
 
     def hermite_arguments(self, side: int) -> tuple:
@@ -371,6 +400,7 @@ class EdgePath:
         for the ``side`` edge of a hermite path."""
         got = self._arguments.get(side)
         if got is None:  # asked by every take of the step and by its arrivals' fit: kept
+            self._ready()
             (v0, dh, v1), h0, ext = self._side(side)
             left, right = self.start()
             got = self._arguments[side] = (self.lam_lo, left, right, self._h0, self._v0, self._h1, self._v1, h0, v0,
@@ -490,6 +520,24 @@ def _clenshaw(c, t):  # pragma: no cover - compiled
     for j in range(c.size - 1, 0, -1):
         b1, b2 = 2.0 * t * b1 - b2 + c[j], b1
     return t * b1 - b2 + c[0]
+
+
+@numba.njit(cache=True)
+def _series_at(coef, lam):  # pragma: no cover - compiled
+    """The two Chebyshev series ``coef`` (n, 2), in t = 2 lam - 1, at each of ``lam`` (flat): shape (size, 2)."""
+    out = np.empty((lam.size, 2))
+    for k in range(lam.size):
+        for c in range(2):
+            out[k, c] = _clenshaw(coef[:, c], 2.0 * lam[k] - 1.0)
+    return out
+
+
+@functools.cache
+def _lobatto_rate(n: int) -> np.ndarray:
+    """The matrix taking a Chebyshev series' n coefficients in t = 2 lam - 1 to its d/dlam's (n - 1)."""
+    out = 2.0 * cheb.chebder(np.eye(n))
+    out.flags.writeable = False
+    return out
 
 
 @functools.cache

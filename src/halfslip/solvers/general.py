@@ -660,9 +660,8 @@ class GeneralSolver(TangentialSolver):
             parent = _on_line(self._line, loads0, loads1) if N0 is not None else None
             width = N1.right - N1.left
             cell = (self.width if self.width is not None else width) / self.nodes / width
-            path = self._paths.put((loads0, loads1), (N0, N1),
-                                   EdgePath(self.problem, N0, N1, loads0, loads1, parent, cell))
-            self.counters["path_solves"] += path.solves
+            path = self._paths.put((loads0, loads1), (N0, N1), EdgePath(self.problem, N0, N1, loads0, loads1, parent,
+                                                                        cell, lazy=True, tally=self.counters))
         return path
 
     def _finish(self, state: ContactState, t1: float, loads1: Loads, ctx: "_Context", fine: "_Outcome",
@@ -1698,7 +1697,7 @@ def _integrate(path: EdgePath, xs: np.ndarray, edge: float, side: int, A: float,
 def _on_line(line: EdgePath | None, loads0: Loads, loads1: Loads) -> tuple[EdgePath, float, float] | None:
     """(line, a, b) where the straight step from ``loads0`` to ``loads1`` is the part [a, b] of ``line``'s step
     (the sub-steps of GeneralSolver.step, their loads its own at the fractions a, b to rounding), else None."""
-    if line is None or line.kind not in ("hermite", "table"):
+    if line is None or line._kind not in ("hermite", "table"):  # (not kind: a lazy line is verified when used)
         return None
     l0, l1 = line.loads0, line.loads1
     dP, dM = l1.P - l0.P, l1.M - l0.M
