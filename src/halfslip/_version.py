@@ -8,4 +8,4 @@ from importlib.metadata import PackageNotFoundError, version
 try:
     __version__ = version("halfslip")
 except PackageNotFoundError:
-    __version__ = "0.4.12"
+    __version__ = "0.4.13"

@@ -620,17 +620,8 @@ def _table_arrival(x, side, col, h0, lam_lo, steps, tv, td):  # pragma: no cover
         g = r + side * _table_at(lam, tv, td, col)
         if g == 0.0:
             break
-        if g > 0.0:
-            hi = lam
-        else:
-            lo = lam
-        slope = side * _table_slope(lam, tv, td, col)
-        new = lam - g / slope if slope != 0.0 else 0.5 * (lo + hi)
-        if not (lo < new < hi):
-            new = 0.5 * (lo + hi)
-        step = abs(new - lam)
-        lam = new
-        if step <= 2e-16 or hi - lo <= 4e-16:
+        lam, lo, hi, done = _newton_step(lam, g, side * _table_slope(lam, tv, td, col), lo, hi)
+        if done:
             break
     return lam
 
@@ -767,19 +758,26 @@ def _hermite_arrivals(v0, dh, v1, r, lam_lo, ext, margin, steps, newton):  # pra
             g = _depth_c(v0, dh, v1, ri, lam)
             if g == 0.0:  # on the crossing: the bisection's limit is lam itself
                 break
-            if g > 0.0:
-                hi = lam
-            else:
-                lo = lam
-            new = lam - g / _slope_c(v0, dh, v1, lam)
-            if not (lo < new < hi):
-                new = 0.5 * (lo + hi)
-            step = abs(new - lam)
-            lam = new
-            if step <= 2e-16 or hi - lo <= 4e-16:
+            lam, lo, hi, done = _newton_step(lam, g, _slope_c(v0, dh, v1, lam), lo, hi)
+            if done:
                 break
         out[i] = lam
     return out
+
+
+@numba.njit(cache=True)
+def _newton_step(lam, g, slope, lo, hi):  # pragma: no cover - compiled
+    """One Newton step on an edge crossing kept in its bracket [lo, hi] (narrowed by the sign of g at lam: g > 0
+    inside, at and above the crossing): the new lam (the bracket's midpoint where the step leaves it or the slope
+    is 0), the new bracket, and whether the step or the bracket is at the rounding of lam."""
+    if g > 0.0:
+        hi = lam
+    else:
+        lo = lam
+    new = lam - g / slope if slope != 0.0 else 0.5 * (lo + hi)
+    if not (lo < new < hi):
+        new = 0.5 * (lo + hi)
+    return new, lo, hi, abs(new - lam) <= 2e-16 or hi - lo <= 4e-16
 
 
 @numba.njit(cache=True)
