@@ -283,6 +283,24 @@ class EdgePath:
         if single <= allowed:
             self.error, self.excess = single / width, single / allowed
             return
+        coef, own = self._interpolate(solve, mid, grows, allowed)
+        self._coef, self._rate, self._origin = coef, _lobatto_rate(coef.shape[0]) @ coef, self._h0  # d/dlam
+        m = 1 << max(1, math.ceil(0.25 * math.log2(max(2.0 * single / allowed, 1.0))))
+        while True:
+            self._tabulate(0.0, 1.0, m)
+            centres = (np.arange(m) + 0.5) / m
+            pieces = np.array(_table_edges(centres, np.zeros(2), self._tv, self._td)).T
+            table = float(np.max(np.abs(pieces - _series_at(coef, centres))[:, grows]))
+            if table <= max(0.5 * allowed, 0.1 * own) or m >= TABLE_PIECES:
+                break
+            m *= 2
+        self.error = (own + table) / width
+        self.excess = (own + table) / allowed
+
+    def _interpolate(self, solve, mid, grows, allowed: float) -> tuple[np.ndarray, float]:
+        """The levels of :meth:`_verify` from the normal solution's edges ``mid`` at mid-step (``solve`` gives
+        them at any fraction of the step): the Chebyshev series of the offsets from the start edges, (n, 2),
+        and its error on the growing edges (``grows``), measured or extrapolated."""
         known = {0.0: (0.0, 0.0), 0.5: tuple(np.array(mid) - self._h0), 1.0: tuple(self._h1 - self._h0)}
         errors = []  # per level from 5 points on, its largest error
         coef = np.zeros((1, 2))  # the series of the level before (none before the first)
@@ -301,25 +319,12 @@ class EdgePath:
                 if len(errors) > 1 and errors[-1] <= GEOMETRIC_RATIO * errors[-2]:
                     own = errors[-1] * (errors[-1] / errors[-2]) ** 2  # twice the points: the square of the ratio
                 if own <= 0.5 * allowed:
-                    break
+                    return coef, own
                 if n >= PATH_NODES:  # not within the allowance: this level's own error, measured between its points
                     between = 0.5 * (mu[1:] + mu[:-1])
                     solved = np.array([solve(m) for m in between.tolist()]) - self._h0
-                    own = float(np.max(np.abs(_series_at(coef, between) - solved)[:, grows]))
-                    break
+                    return coef, float(np.max(np.abs(_series_at(coef, between) - solved)[:, grows]))
             n = 2 * n - 1
-        self._coef, self._rate, self._origin = coef, _lobatto_rate(coef.shape[0]) @ coef, self._h0  # d/dlam
-        m = 1 << max(1, math.ceil(0.25 * math.log2(max(2.0 * single / allowed, 1.0))))
-        while True:
-            self._tabulate(0.0, 1.0, m)
-            centres = (np.arange(m) + 0.5) / m
-            pieces = np.array(_table_edges(centres, np.zeros(2), self._tv, self._td)).T
-            table = float(np.max(np.abs(pieces - _series_at(coef, centres))[:, grows]))
-            if table <= max(0.5 * allowed, 0.1 * own) or m >= TABLE_PIECES:
-                break
-            m *= 2
-        self.error = (own + table) / width
-        self.excess = (own + table) / allowed
 
     def _tabulate(self, a: float, b: float, m: int) -> None:
         """This path's table (kind "table"): m equal cubic Hermite pieces of the interpolant ``_coef`` (a
