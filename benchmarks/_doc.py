@@ -3,11 +3,22 @@ times (this tree and a git revision's, in a temporary worktree)."""
 from __future__ import annotations
 
 import contextlib
+import os
+import platform
 import subprocess
 import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+
+
+def machine() -> str:
+    """The machine and the numerical stack, as a benchmark's table states them."""
+    import numba
+    import numpy
+    import scipy
+    return (f"{platform.system()} {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
+            f"numpy {numpy.__version__}, scipy {scipy.__version__}, numba {numba.__version__}")
 
 
 @contextlib.contextmanager

@@ -22,7 +22,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import subprocess
 import sys
 import tempfile
@@ -31,7 +30,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _doc import package_trees, write_section  # noqa: E402
+from _doc import machine, package_trees, write_section  # noqa: E402
 
 DOC = ROOT / "docs" / "benchmarks.md"
 BEGIN, END = "<!-- examples: begin -->", "<!-- examples: end -->"
@@ -120,14 +119,6 @@ def measure(trees: dict[str, Path], repeat: int, examples: list[str]) -> dict:
     return out
 
 
-def _machine() -> str:
-    import numba
-    import numpy
-    import scipy
-    return (f"{platform.system()} {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
-            f"numpy {numpy.__version__}, scipy {scipy.__version__}, numba {numba.__version__}")
-
-
 def write_doc(results: dict, trees: dict[str, Path], argv: list[str]) -> None:
     labels = list(trees)
     head = "| example | method | steps | " + " | ".join(
@@ -155,7 +146,7 @@ def write_doc(results: dict, trees: dict[str, Path], argv: list[str]) -> None:
     text = "\n".join([
         BEGIN,
         f"`python benchmarks/{Path(__file__).name} {' '.join(argv)}`".replace(" `", "`"),
-        f"({time.strftime('%Y-%m-%d')}; {_machine()}; median of the timed runs, each a whole "
+        f"({time.strftime('%Y-%m-%d')}; {machine()}; median of the timed runs, each a whole "
         "`halfslip.simulate` with start-up and stored fields in a fresh process"
         + (", the trees alternating run by run" if len(labels) == 2 else "")
         + "; step() alone: the solver's steps of a second run in the same process, per marched step; "

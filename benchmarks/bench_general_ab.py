@@ -23,7 +23,7 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from _doc import package_trees, write_section  # noqa: E402
+from _doc import machine, package_trees, write_section  # noqa: E402
 
 DOC = HERE.parent / "docs" / "benchmarks.md"
 BEGIN, END = "<!-- general_ab: begin -->", "<!-- general_ab: end -->"
@@ -94,13 +94,13 @@ def main(argv=None) -> None:
                     print(rows[-1], flush=True)
     text = "\n".join([
         BEGIN,
-        f"`python benchmarks/{Path(__file__).name} {' '.join(argv)}` ({time.strftime('%Y-%m-%d')}; the trees "
-        f"alternating, median of {args.repeat} runs each; per run both seeds, best of two passes per history; "
-        "edges: the largest difference of the two trees' outermost stick points over the width, dissipation: "
-        "of the final dissipation, relative)",
+        (f"`python benchmarks/{Path(__file__).name} {' '.join(argv)}` ({time.strftime('%Y-%m-%d')}; {machine()}; "
+         f"the trees alternating, median of {args.repeat} runs each; per run both seeds, best of two passes per "
+         "history; edges: the largest difference of the two trees' outermost stick points over the width, "
+         "dissipation: of the final dissipation, relative)"),
         "",
-        f"| geometry | nodes | windows | {labels[0]} [ms / step] | {labels[1]} [ms / step] | ratio | edges | "
-        "dissipation |",
+        (f"| geometry | nodes | windows | {labels[0]} [ms / step] | {labels[1]} [ms / step] | ratio | edges | "
+         "dissipation |"),
         "|---|---:|---|---:|---:|---:|---:|---:|",
         *rows,
         END,
