@@ -371,8 +371,9 @@ MOVING_GROWTH_WIDTH = 6.045147908506354e-4
 #: at 512 / 1024 nodes (about second order; q by GeneralSolver.tractions at 31 points): tolerance 2x.
 FORMING_STUCK_TOL = {512: 1e-3, 1024: 3e-4}
 #: The same after the second step, which starts in contact and grows while the moment moves it: measured 2.9e-4
-#: / 1.5e-4 at 512 / 1024 nodes (7.2e-5 at 2048: first order) since 0.4.13, whose step paths are the normal
-#: problem's to 1e-12 of the edges' travel (EdgePath._verify); 1.7e-3 / 1.5e-3 before (1.8e-3 at 2048 and 4096,
+#: / 1.5e-4 at 512 / 1024 nodes (7.2e-5 at 2048; at these 31 points: the cells straddling the first step's edges
+#: converge as the square root of the cell, docs/general_solver.md "Edge paths") since 0.4.13, whose step paths
+#: are the normal problem's to far below a cell (EdgePath._verify); 1.7e-3 / 1.5e-3 before (1.8e-3 at 2048 and 4096,
 #: benchmarks/stuck_growth_exact.py: the single cubic's edges, 2.4e-4 of the width off mid-step, set the locks of
 #: the material arriving in the step). Tolerance 2x.
 GROWING_STUCK_TOL = {512: 6e-4, 1024: 3e-4}
