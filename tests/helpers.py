@@ -170,7 +170,8 @@ def stuck_shear(problem, path, x):
     total = 0.0
     u, w = 0.5 * (_GAUSS_U + 1.0), 0.5 * _GAUSS_W
     for k in range(1, len(loads)):
-        if loads[k - 1][0] > 0.0 and edges(k, 0.0)[0] < x < edges(k, 0.0)[1]:
+        start = edges(k, 0.0) if loads[k - 1][0] > 0.0 else None
+        if start is not None and start[0] < x < start[1]:
             arrival = 0.0
         else:
             left, right = edges(k, 1.0)

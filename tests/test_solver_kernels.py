@@ -277,8 +277,8 @@ def test_a_table_path_is_the_normal_problem_to_its_allowance(kind, short):
     """Random steps (P, M changed, some edge growing) as the solver makes their paths: the table's edges at
     201 points of the step against the normal problem's own there. The growing edges within the allowance
     (gp.allowance: for the default cell, 1/2048 of the width, 9e-13 of their travel, at least PATH_ROUNDING of
-    the width), and within the path's own
-    error estimate (``error``) and the normal solver's rounding (the allowance's floor): both the rule and
+    the width), and within the path's own error estimate (``error``) and the normal solver's rounding (the
+    allowance's floor): both the rule and
     the estimate can fail, a path off by its cubic's error (1e-6 to 1e-4 of the width on the long steps)
     fails both. (The random moments stay below 0.2 a P0: no edge crosses the punch's flat end, where the path
     has a kink; docs/general_solver.md, Limits.)"""
@@ -286,14 +286,15 @@ def test_a_table_path_is_the_normal_problem_to_its_allowance(kind, short):
     for path in _hermite_paths(kind, 4, seed=41 if short else 43, short=short, table=True):
         grow = _growing(path)
         width = path._h1[1] - path._h1[0]
-        off = np.abs(np.array(path.edges(lam)).T - _solved_edges(path, lam))[:, grow].max()
+        solved = _solved_edges(path, lam)
+        off = np.abs(np.array(path.edges(lam)).T - solved)[:, grow].max()
         assert off <= _allowance(path), (off / width, path.solves, path.error)
         assert off <= path.error * width + gp.PATH_ROUNDING * width, (off / width, path.error)
         with pytest.MonkeyPatch.context() as mp:  # the same step's single cubic: off by far more
             mp.setattr(gp, "PATH_SHARE", 1e9)
             cubic = EdgePath(path.problem, path.problem.solve(path.loads0.P, path.loads0.M),
                              path.problem.solve(path.loads1.P, path.loads1.M), path.loads0, path.loads1)
-        assert np.abs(np.array(cubic.edges(lam)).T - _solved_edges(path, lam))[:, grow].max() > 10.0 * off
+        assert np.abs(np.array(cubic.edges(lam)).T - solved)[:, grow].max() > 10.0 * off
 
 
 def _table_bisection(path: EdgePath, x: np.ndarray, side: int) -> np.ndarray:

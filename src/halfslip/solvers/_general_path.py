@@ -565,15 +565,18 @@ def _lobatto_inverse(n: int) -> np.ndarray:
 
 
 @numba.njit(cache=True)
+def _piece(lam, m):  # pragma: no cover - compiled
+    """The piece of m equal pieces of [0, 1] that holds ``lam`` and ``lam``'s parameter s in it."""
+    p = min(max(int(lam * m), 0), m - 1)
+    return p, lam * m - p
+
+
+@numba.njit(cache=True)
 def _table_at(lam, tv, td, col):  # pragma: no cover - compiled
     """Column ``col`` (0 left, 1 right) of the table at ``lam``: its cubic Hermite piece there (m equal pieces of
     [0, 1], knot values ``tv`` and slopes ``td`` per piece's parameter), in :func:`_depth`'s offset form."""
-    m = tv.shape[0] - 1
-    p = min(max(int(lam * m), 0), m - 1)
-    s = lam * m - p
-    t = 1.0 - s
-    return tv[p, col] + s * (t * t * td[p, col] + s * ((3.0 - 2.0 * s) * (tv[p + 1, col] - tv[p, col])
-                                                        - t * td[p + 1, col]))
+    p, s = _piece(lam, tv.shape[0] - 1)
+    return _depth_c(td[p, col], tv[p + 1, col] - tv[p, col], td[p + 1, col], tv[p, col], s)
 
 
 @numba.njit(cache=True)
@@ -591,10 +594,8 @@ def _table_edges(lam, h0, tv, td):  # pragma: no cover - compiled
 def _table_slope(lam, tv, td, col):  # pragma: no cover - compiled
     """d/dlam of :func:`_table_at`."""
     m = tv.shape[0] - 1
-    p = min(max(int(lam * m), 0), m - 1)
-    s = lam * m - p
-    return m * (6.0 * s * (1.0 - s) * (tv[p + 1, col] - tv[p, col]) + (s - 1.0) * (3.0 * s - 1.0) * td[p, col]
-                + s * (3.0 * s - 2.0) * td[p + 1, col])
+    p, s = _piece(lam, m)
+    return m * _slope_c(td[p, col], tv[p + 1, col] - tv[p, col], td[p + 1, col], s)
 
 
 @numba.njit(cache=True)

@@ -103,9 +103,6 @@ MAX_SUBSTEPS = 64
 #: against 6.9e-5: the shadow's longer sub-steps add their time error, on the safe side. One take of the
 #: whole step (no sub-steps for the shadow) would not converge: 4.2e-4 at 4096 nodes.
 SHADOW_EVERY = 4
-#: Loads of a sub-step off its step's line by at most this relative to the step's loads are on it (_on_line):
-#: GeneralSolver.step makes them as a + lam (b - a), each rounded once (a few eps).
-LINE_ROUNDING = 1e-12
 #: Cells a contact edge may advance in one sub-step while part of the contact slips (the arrivals' locked
 #: displacements: the shape of M1's increments, their size from the lattice, _take; measured in
 #: docs/general_solver.md).
@@ -458,8 +455,9 @@ class GeneralSolver(TangentialSolver):
         self._columns = _Kept(LOADS_KEPT)
         self._end_args = _Kept(LOADS_KEPT)  # _end_arguments' answers
         self._paths = _Kept(LOADS_KEPT)
-        #: the edge path of the step being cut into sub-steps: theirs are parts of it (_on_line)
-        self._line: EdgePath | None = None
+        #: the edge path of the step being cut into sub-steps and the fraction of it at each sub-step's loads:
+        #: their paths are parts of it (_on_line)
+        self._line: tuple[EdgePath | None, dict[Loads, float]] | None = None
         self._sums = _Kept(SUMS_KEPT)  # sum q of the recent takes' states, by their q (the next take's datum term)
         self.counters = dict.fromkeys(("steps", "substeps", "takes", "shadow_takes", "iterations", "cg_iterations",
                                        "restarts", "normal_solves", "path_solves"), 0)
@@ -510,7 +508,7 @@ class GeneralSolver(TangentialSolver):
         loads0 = state.loads
         lo = 0.0 if state.memory.normal is not None or loads0.P >= 0.0 else loads0.P / (loads0.P - loads1.P)
         reports = []
-        self._line = ctx.path  # the sub-steps' edge paths are parts of the step's (_on_line)
+        self._line = (ctx.path, {loads0: lo})  # the sub-steps' edge paths are parts of the step's (_on_line)
         try:
             sub, spread = self._sub_steps(state, t1, loads1, ctx, rough, end, pieces, lo, reports)
         finally:
@@ -541,6 +539,7 @@ class GeneralSolver(TangentialSolver):
         for k in range(1, pieces + 1):
             lam = lo + (1.0 - lo) * k / pieces
             at = Loads(*(a + lam * (b - a) for a, b in zip(loads0, loads1))) if k < pieces else loads1
+            self._line[1][at] = lam if k < pieces else 1.0
             # the active set starts from the sub-step's start pattern moved towards the whole step's end
             # pattern (the stick-slip boundaries travel steadily through a step)
             hint = _toward(sub.memory, end, 1.0 / (pieces - k + 1))
@@ -1694,24 +1693,17 @@ def _integrate(path: EdgePath, xs: np.ndarray, edge: float, side: int, A: float,
     return out
 
 
-def _on_line(line: EdgePath | None, loads0: Loads, loads1: Loads) -> tuple[EdgePath, float, float] | None:
-    """(line, a, b) where the straight step from ``loads0`` to ``loads1`` is the part [a, b] of ``line``'s step
-    (the sub-steps of GeneralSolver.step, their loads its own at the fractions a, b to rounding), else None."""
-    if line is None or line._kind not in ("hermite", "table"):  # (not kind: a lazy line is verified when used)
+def _on_line(line: tuple[EdgePath | None, dict[Loads, float]] | None, loads0: Loads,
+             loads1: Loads) -> tuple[EdgePath, float, float] | None:
+    """(path, a, b) where the straight step from ``loads0`` to ``loads1`` is the part [a, b] of the step whose
+    edge path is ``path``: ``line`` = (path, the fraction of the step at each of its sub-steps' loads, as
+    GeneralSolver._sub_steps made them), else None."""
+    # (_kind, not kind: a lazy path is verified when its edges are used)
+    if line is None or line[0] is None or line[0]._kind not in ("hermite", "table"):
         return None
-    l0, l1 = line.loads0, line.loads1
-    dP, dM = l1.P - l0.P, l1.M - l0.M
-    if dP == 0.0 and dM == 0.0:
-        return None
-    by_P = abs(dP) * (abs(l0.M) + abs(l1.M)) >= abs(dM) * (abs(l0.P) + abs(l1.P))
-    a, b = ((v.P - l0.P) / dP if by_P else (v.M - l0.M) / dM for v in (loads0, loads1))
-    if not 0.0 <= a < b <= 1.0:
-        return None
-    for lam, v in ((a, loads0), (b, loads1)):
-        for x0, x1, x in zip(l0, l1, v):
-            if abs(x0 + lam * (x1 - x0) - x) > LINE_ROUNDING * (abs(x0) + abs(x1)):
-                return None
-    return line, a, b
+    path, fractions = line
+    a, b = fractions.get(loads0), fractions.get(loads1)
+    return (path, a, b) if a is not None and b is not None and a < b else None
 
 
 def _toward(now: GeneralMemory, end, fraction: float):
